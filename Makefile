@@ -1,0 +1,57 @@
+# vastocean: the two commands a fresh Debian machine needs are `make run` and `make test`.
+# Both install what is missing first (setup), so nothing has to be installed by hand.
+
+CARGO      ?= cargo
+# Debian packages the build needs: Embree (headers + library), libclang for bindgen,
+# a C compiler for the shim.
+DEB_PKGS   := libembree-dev libclang-dev pkg-config gcc
+SUDO       := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+OUT        ?= out
+
+.PHONY: setup build run test test-full bench lint embree4-check clean
+
+# Installs only the packages that are missing; apt-get update runs only when something is.
+setup:
+	@missing=""; for p in $(DEB_PKGS); do \
+	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  echo "setup: installing$$missing"; \
+	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get update -qq && \
+	  $(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $$missing; \
+	else echo "setup: Debian packages present ($(DEB_PKGS))"; fi
+
+build: setup
+	$(CARGO) build --release
+
+# Until the renderer lands, the default "scene" is the Embree smoke run: build a BVH over a
+# tessellated grid and trace a batch of rays through it, printing hit statistics.
+run: build
+	./target/release/vastocean info
+	./target/release/vastocean smoke
+
+test: setup
+	$(CARGO) test --all-targets -- --quiet
+	$(CARGO) test --no-default-features --lib -- --quiet
+
+# Heavy cases (#[ignore]) on top of the default suite.
+test-full: test
+	$(CARGO) test --release -- --ignored
+
+bench: setup
+	$(CARGO) bench
+
+lint: setup
+	$(CARGO) fmt --check
+	$(CARGO) clippy --all-targets -- -D warnings
+	$(CARGO) clippy --all-targets --no-default-features -- -D warnings
+
+# Compiles wrapper/ against Embree 4's headers from Debian 13's libembree-dev, unpacked into
+# a temporary folder with its own apt state (nothing is installed), so the Embree 4 branch of
+# the shim cannot rot on a Debian 12 machine.
+embree4-check:
+	bash .ci/embree4-check
+
+clean:
+	$(CARGO) clean
+	rm -rf $(OUT)

@@ -1,0 +1,123 @@
+//! Exhaustive ray-triangle intersection in f64: every ray against every triangle. Far too slow
+//! to render with, and meant to be: it is the independent witness that the tests compare
+//! Embree and the Rust BVH against, with no acceleration structure of its own to get wrong.
+
+use super::{Accel, Hit, Ray};
+use crate::mesh::Mesh;
+
+/// Möller–Trumbore in f64 without backface culling. Returns `(t, u, v)` with Embree's
+/// barycentric convention, or `None` for a miss or a ray parallel to the triangle.
+pub fn intersect_triangle(ray: &Ray, tri: [[f32; 3]; 3]) -> Option<(f64, f64, f64)> {
+    let f = |a: [f32; 3]| [a[0] as f64, a[1] as f64, a[2] as f64];
+    let (o, d) = (f(ray.org), f(ray.dir));
+    let (p0, p1, p2) = (f(tri[0]), f(tri[1]), f(tri[2]));
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let (e1, e2) = (sub(p1, p0), sub(p2, p0));
+    let pv = cross(d, e2);
+    let det = dot(e1, pv);
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let tv = sub(o, p0);
+    let u = dot(tv, pv) * inv;
+    let qv = cross(tv, e1);
+    let v = dot(d, qv) * inv;
+    if u < 0.0 || v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    let t = dot(e2, qv) * inv;
+    (t >= ray.tnear as f64 && t <= ray.tfar as f64).then_some((t, u, v))
+}
+
+/// The brute-force backend: owns its mesh, loops over all triangles per ray.
+pub struct BruteForce {
+    mesh: Mesh,
+}
+
+impl BruteForce {
+    pub fn new(mesh: Mesh) -> BruteForce {
+        BruteForce { mesh }
+    }
+
+    /// All triangles the ray hits, as `(t, prim)` in f64, nearest first.
+    pub fn all_hits(&self, ray: &Ray) -> Vec<(f64, u32)> {
+        let mut hits: Vec<(f64, u32)> = (0..self.mesh.triangle_count() as u32)
+            .filter_map(|p| intersect_triangle(ray, self.mesh.triangle(p)).map(|(t, _, _)| (t, p)))
+            .collect();
+        hits.sort_by(|a, b| a.0.total_cmp(&b.0));
+        hits
+    }
+}
+
+impl Accel for BruteForce {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let mut best: Option<(f64, u32, f64, f64)> = None;
+        for p in 0..self.mesh.triangle_count() as u32 {
+            if let Some((t, u, v)) = intersect_triangle(ray, self.mesh.triangle(p))
+                && best.is_none_or(|b| t < b.0)
+            {
+                best = Some((t, p, u, v));
+            }
+        }
+        best.map(|(t, prim, u, v)| Hit {
+            t: t as f32,
+            prim,
+            u: u as f32,
+            v: v as f32,
+        })
+    }
+
+    fn intersect_many(&self, rays: &mut [Ray], hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
+        for (r, h) in rays.iter().zip(hits.iter_mut()) {
+            *h = self.intersect(r);
+        }
+    }
+
+    fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    fn name(&self) -> &'static str {
+        "brute"
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hits_quad_with_embree_barycentrics() {
+        let m = Mesh::new(
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+            vec![],
+            vec![],
+            vec![[0, 1, 2]],
+        )
+        .unwrap();
+        let b = BruteForce::new(m);
+        let h = b
+            .intersect(&Ray::new([0.25, 2.0, 0.5], [0.0, -1.0, 0.0]))
+            .unwrap();
+        assert_eq!((h.t, h.prim, h.u, h.v), (2.0, 0, 0.25, 0.5));
+        assert!(
+            b.intersect(&Ray::new([0.75, 2.0, 0.5], [0.0, -1.0, 0.0]))
+                .is_none()
+        );
+        // parallel ray in the triangle's plane: a miss, not a NaN
+        assert!(
+            b.intersect(&Ray::new([-1.0, 0.0, 0.1], [1.0, 0.0, 0.0]))
+                .is_none()
+        );
+    }
+}

@@ -1,0 +1,64 @@
+//! Ray-tracing backends behind one interface (DESIGN.md, "Ray tracing contract").
+//!
+//! The integrator only sees [`Accel`]: closest hit of one ray, or of a batch, as
+//! `Hit { t, prim, u, v }` with Embree's barycentric convention (the hit point is
+//! `(1-u-v)·v0 + u·v1 + v·v2`), and the texture coordinate interpolated at a hit. Backends:
+//! [`embree`] (Debian's Embree through the C shim in `wrapper/`) and [`brute`] (an exhaustive
+//! f64 loop, the oracle the tests compare every other backend against).
+
+pub mod brute;
+#[cfg(feature = "embree")]
+pub mod embree;
+
+use crate::mesh::Mesh;
+
+/// A ray: points `org + t·dir` for `t` in `[tnear, tfar]`. The layout matches the C shim's
+/// `vo_ray`, so batches are handed to Embree without copying.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub org: [f32; 3],
+    pub tnear: f32,
+    pub dir: [f32; 3],
+    pub tfar: f32,
+}
+
+impl Ray {
+    pub fn new(org: [f32; 3], dir: [f32; 3]) -> Ray {
+        Ray {
+            org,
+            tnear: 0.0,
+            dir,
+            tfar: f32::INFINITY,
+        }
+    }
+    pub fn at(&self, t: f32) -> [f32; 3] {
+        std::array::from_fn(|i| self.org[i] + t * self.dir[i])
+    }
+}
+
+/// The closest hit of a ray on primitive `prim` at parameter `t`, barycentrics `(u, v)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub t: f32,
+    pub prim: u32,
+    pub u: f32,
+    pub v: f32,
+}
+
+/// What every tracing backend offers the integrator.
+pub trait Accel: Send + Sync {
+    /// Closest hit of `ray`, if any.
+    fn intersect(&self, ray: &Ray) -> Option<Hit>;
+    /// Closest hits of many rays; `hits.len()` must equal `rays.len()`.
+    fn intersect_many(&self, rays: &mut [Ray], hits: &mut [Option<Hit>]);
+    /// The mesh being traced.
+    fn mesh(&self) -> &Mesh;
+    /// Texture coordinate (nominal horizontal position) interpolated at a hit.
+    fn interpolate_uv(&self, hit: &Hit) -> [f32; 2] {
+        let m = self.mesh();
+        Mesh::interpolate(m.uvs(), m.indices()[hit.prim as usize], hit.u, hit.v)
+    }
+    /// Short name for reports ("embree", "brute", ...).
+    fn name(&self) -> &'static str;
+}

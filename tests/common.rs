@@ -1,0 +1,96 @@
+//! Scenes and comparisons shared by the integration tests.
+// Without Embree only the brute-force oracle remains, so some helpers have no caller yet.
+#![cfg_attr(not(feature = "embree"), allow(dead_code))]
+
+use vastocean::accel::{Accel, Ray, brute::BruteForce};
+use vastocean::mesh::Mesh;
+use vastocean::rng::Rng;
+
+/// `n` random triangles with corners in the unit cube, edges up to about `size` long.
+pub fn random_mesh(n: usize, size: f32, seed: u64) -> Mesh {
+    let mut r = Rng::keyed(&[seed, 0x6d65_7368]);
+    let mut positions = Vec::with_capacity(3 * n);
+    for _ in 0..n {
+        let c = [r.f32(), r.f32(), r.f32()];
+        for _ in 0..3 {
+            positions.push(std::array::from_fn(|k| c[k] + size * (r.f32() - 0.5)));
+        }
+    }
+    let indices = (0..n as u32)
+        .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+        .collect();
+    Mesh::new(positions, vec![], vec![], indices).unwrap()
+}
+
+/// Rays from random points in a slightly larger cube in uniformly random directions.
+pub fn random_rays(n: usize, seed: u64) -> Vec<Ray> {
+    let mut r = Rng::keyed(&[seed, 0x7261_7973]);
+    (0..n)
+        .map(|_| {
+            Ray::new(
+                [r.range(-0.2, 1.2), r.range(-0.2, 1.2), r.range(-0.2, 1.2)],
+                r.unit_vector(),
+            )
+        })
+        .collect()
+}
+
+/// How a backend's answer for one ray compares with the brute-force oracle.
+#[derive(Debug, PartialEq)]
+pub enum Verdict {
+    Same,
+    /// Different answers, but the ray passes within `tol` (barycentric) of an edge of the
+    /// triangle in question, or the two triangles lie at the same distance: a tie that f32
+    /// and f64 arithmetic may legitimately break differently.
+    Ambiguous,
+    Wrong(String),
+}
+
+/// Compares `hit` for `ray` with the oracle, allowing `rel_t` relative error in t.
+pub fn judge(
+    oracle: &BruteForce,
+    ray: &Ray,
+    hit: Option<vastocean::accel::Hit>,
+    rel_t: f64,
+) -> Verdict {
+    let all = oracle.all_hits(ray);
+    let near_edge = |prim: u32| {
+        vastocean::accel::brute::intersect_triangle(
+            &Ray {
+                tnear: f32::MIN,
+                tfar: f32::MAX,
+                ..*ray
+            },
+            oracle.mesh().triangle(prim),
+        )
+        .map(|(_, u, v)| u.min(v).min(1.0 - u - v) < 1e-4)
+        .unwrap_or(true)
+    };
+    match (hit, all.first()) {
+        (None, None) => Verdict::Same,
+        (Some(h), Some(&(t, p)))
+            if h.prim == p && ((h.t as f64 - t).abs() <= rel_t * t.abs().max(1e-3)) =>
+        {
+            Verdict::Same
+        }
+        (Some(h), Some(&(t, p))) => {
+            let tie = all
+                .iter()
+                .any(|&(t2, p2)| p2 == h.prim && (t2 - t).abs() <= rel_t * t.abs().max(1e-3));
+            if tie || near_edge(h.prim) || near_edge(p) {
+                Verdict::Ambiguous
+            } else {
+                Verdict::Wrong(format!(
+                    "backend prim {} t {} vs oracle prim {p} t {t}",
+                    h.prim, h.t
+                ))
+            }
+        }
+        (None, Some(&(t, p))) if near_edge(p) => {
+            let _ = t;
+            Verdict::Ambiguous
+        }
+        (Some(h), None) if near_edge(h.prim) => Verdict::Ambiguous,
+        (a, b) => Verdict::Wrong(format!("backend {a:?} vs oracle {b:?}")),
+    }
+}

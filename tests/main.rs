@@ -1,0 +1,5 @@
+//! Integration tests: one binary, one module per subsystem.
+
+mod common;
+#[cfg(feature = "embree")]
+mod embree;

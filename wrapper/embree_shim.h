@@ -1,0 +1,109 @@
+/*
+ * embree_shim.h - a small, version-neutral C API over Embree 3 or Embree 4.
+ *
+ * Rust binds this header (bindgen, allowlisted to the vo_ names) instead of Embree's own, so
+ * that the Rust side never sees the API differences between Embree 3 (RTCIntersectContext,
+ * ray streams) and Embree 4 (RTCIntersectArguments, no streams), and never has to re-implement
+ * Embree's inline helpers (rtcInitIntersectContext, rtcInterpolate0/1), which have no exported
+ * symbol. The shim is compiled against whichever major version build.rs found; the choice is
+ * made on RTC_VERSION_MAJOR in embree_shim.c.
+ *
+ * Handles are opaque pointers. Buffers passed to vo_geometry_triangles are shared, not copied:
+ * the caller keeps them alive, unmodified, until the scene is released, and pads them so that
+ * Embree's 16-byte loads past the last element stay inside the allocation.
+ */
+#ifndef VASTOCEAN_EMBREE_SHIM_H
+#define VASTOCEAN_EMBREE_SHIM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* primitive index of a ray that hit nothing */
+#define VO_INVALID_ID 0xFFFFFFFFu
+
+/* Scene build quality, mapped onto RTCBuildQuality. */
+typedef enum vo_quality { VO_QUALITY_LOW = 0, VO_QUALITY_MEDIUM = 1, VO_QUALITY_HIGH = 2, VO_QUALITY_REFIT = 3 } vo_quality;
+
+/* Scene flags (bit set), mapped onto RTCSceneFlags. */
+#define VO_SCENE_COMPACT 1u
+#define VO_SCENE_ROBUST 2u
+
+/* Called by Embree on every device error; `user` is the pointer given at device creation. */
+typedef void (*vo_error_fn)(void *user, int code, const char *message);
+
+/* A ray, laid out for easy filling from Rust: origin, tnear, direction, tfar. */
+typedef struct vo_ray {
+  float org[3];
+  float tnear;
+  float dir[3];
+  float tfar;
+} vo_ray;
+
+/* The closest hit of a ray: prim == VO_INVALID_ID when it missed. (u, v) are Embree's
+ * barycentrics: the hit point is (1-u-v)*v0 + u*v1 + v*v2. ng is the unnormalized geometric
+ * normal (v1-v0) x (v2-v0) as Embree reports it. */
+typedef struct vo_hit {
+  float t;
+  float u;
+  float v;
+  uint32_t prim;
+  uint32_t geom;
+  float ng[3];
+} vo_hit;
+
+typedef struct vo_version {
+  int major;
+  int minor;
+  int patch;
+} vo_version;
+
+/* The Embree version this shim was compiled against (from the headers). */
+vo_version vo_compiled_version(void);
+
+/* Creates a device from an Embree config string (e.g. "threads=2"); NULL on failure. */
+void *vo_device_new(const char *config, vo_error_fn on_error, void *user);
+void vo_device_release(void *device);
+/* The last error code of the device (RTCError), clearing it; 0 means none. */
+int vo_device_take_error(void *device);
+/* The version the loaded library reports at run time. */
+vo_version vo_device_version(void *device);
+/* Creates a device with verbose=1 and copies Embree's banner (CPU, ISA, threads, tasking)
+ * into buf (NUL-terminated, truncated to len). Returns the number of bytes written. */
+size_t vo_describe(const char *config, char *buf, size_t len);
+
+/* Sets flush-to-zero and denormals-are-zero in this thread's MXCSR, as Embree asks of every
+ * thread that traces (denormal arithmetic is many times slower in its kernels). */
+void vo_flush_denormals(void);
+
+/* Scenes */
+void *vo_scene_new(void *device, vo_quality quality, uint32_t flags);
+void vo_scene_release(void *scene);
+/* Attaches a triangle mesh from caller-owned buffers and commits the geometry.
+ * positions: 3 floats per vertex (12-byte stride) with at least 4 readable bytes after the
+ * last vertex; indices: 3 uint32 per triangle; uvs: 2 floats per vertex with at least 8
+ * readable bytes after the last one, or NULL for none (stored in vertex-attribute slot 0).
+ * Returns the geometry handle (owned by the scene) or NULL on error; *geom_id receives its id. */
+void *vo_scene_attach_triangles(void *device, void *scene, vo_quality quality, const float *positions,
+                                size_t vertex_count, const uint32_t *indices, size_t triangle_count,
+                                const float *uvs, uint32_t *geom_id);
+void vo_scene_commit(void *scene);
+void vo_scene_bounds(void *scene, float lower[3], float upper[3]);
+
+/* Queries; the scene must be committed. Safe to call from many threads at once. */
+void vo_intersect1(void *scene, const vo_ray *ray, vo_hit *hit);
+/* Traces n rays in packets of 16 (rtcIntersect16 on both Embree 3 and 4). */
+void vo_intersect_batch(void *scene, const vo_ray *rays, vo_hit *hits, size_t n);
+/* 1 when anything lies on the ray within [tnear, tfar], else 0. */
+int vo_occluded1(void *scene, const vo_ray *ray);
+/* Interpolates vertex-attribute slot 0 (the texture coordinate) at a hit. */
+void vo_interpolate_uv(void *geometry, uint32_t prim, float u, float v, float out[2]);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
