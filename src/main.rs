@@ -8,6 +8,7 @@ use clap::{Parser, Subcommand};
 use serde::Serialize;
 #[cfg(feature = "embree")]
 use vastocean::accel::embree::Quality;
+use vastocean::ocean::{LayerSpec, OceanParams, Surface};
 
 #[derive(Parser)]
 #[command(
@@ -31,6 +32,8 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Generate the ocean layers (TMA spectrum, FFT) and report their statistics.
+    Ocean(OceanArgs),
     /// Embree smoke run: build a BVH over a wavy grid and trace random rays down onto it.
     #[cfg(feature = "embree")]
     Smoke {
@@ -50,6 +53,129 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+}
+
+#[derive(clap::Args)]
+// Negative numbers are values, so that `--wind -1` reaches validation and its named error.
+#[command(allow_negative_numbers = true)]
+struct OceanArgs {
+    /// Wind speed at 10 m, m/s.
+    #[arg(long, default_value_t = OceanParams::default().wind_speed)]
+    wind: f64,
+    /// Fetch, km.
+    #[arg(long, default_value_t = OceanParams::default().fetch_km)]
+    fetch: f64,
+    /// Water depth, m.
+    #[arg(long, default_value_t = OceanParams::default().depth_m)]
+    depth: f64,
+    /// Scale the realization to this RMS height, m (the paper's Table 1 gives one per case).
+    #[arg(long)]
+    rms: Option<f64>,
+    /// Layers as SIZE_M:N pairs, coarsest first, e.g. 400:512,47.3:512,5.83:256.
+    #[arg(long, value_parser = parse_layers)]
+    layers: Option<Layers>,
+    /// Horizontal displacement scale f_d (paper eq. 3); 0 = pure height field.
+    #[arg(long, default_value_t = OceanParams::default().choppiness)]
+    choppiness: f64,
+    /// Time t of paper eq. 2, s.
+    #[arg(long, default_value_t = 0.0)]
+    time: f64,
+    /// Random seed of the realization.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Write a height / shaded-normal preview PNG here.
+    #[arg(long)]
+    png: Option<std::path::PathBuf>,
+    /// Preview extent, metres (default: the coarsest layer's size).
+    #[arg(long)]
+    png_extent: Option<f64>,
+    /// Print one JSON object on stdout instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+/// A newtype so clap treats the whole list as one value.
+#[derive(Clone, Debug)]
+struct Layers(Vec<LayerSpec>);
+
+fn parse_layers(s: &str) -> Result<Layers, String> {
+    s.split(',')
+        .map(|pair| {
+            let (size, n) = pair
+                .split_once(':')
+                .ok_or_else(|| format!("layer {pair:?} is not SIZE_M:N"))?;
+            let size_m = size
+                .trim()
+                .parse::<f64>()
+                .map_err(|e| format!("layer size {size:?}: {e}"))?;
+            let n = n
+                .trim()
+                .parse::<usize>()
+                .map_err(|e| format!("layer grid {n:?}: {e}"))?;
+            Ok(LayerSpec { size_m, n })
+        })
+        .collect::<Result<_, _>>()
+        .map(Layers)
+}
+
+fn ocean(a: OceanArgs) -> Result<()> {
+    let defaults = OceanParams::default();
+    let params = OceanParams {
+        wind_speed: a.wind,
+        fetch_km: a.fetch,
+        depth_m: a.depth,
+        rms_m: a.rms,
+        choppiness: a.choppiness,
+        time_s: a.time,
+        layers: a.layers.map_or(defaults.layers.clone(), |l| l.0),
+        ..defaults
+    };
+    params.validate().map_err(|e| BadInput(e.to_string()))?;
+    let surface = Surface::new(&params, a.seed)?;
+    let s = surface.summary();
+    if let Some(path) = &a.png {
+        let extent = a.png_extent.unwrap_or(params.layers[0].size_m);
+        vastocean::ocean::write_preview_png(&surface, path, 1024, extent)?;
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&s)?);
+        return Ok(());
+    }
+    println!(
+        "ocean: wind {} m/s, fetch {} km, depth {} m, seed {}",
+        params.wind_speed, params.fetch_km, params.depth_m, a.seed
+    );
+    println!(
+        "  layer   size (m)     n   spacing (m)   band k (rad/m)      spectrum RMS   realization RMS"
+    );
+    for (i, l) in s.layers.iter().enumerate() {
+        println!(
+            "  {i:>5} {:>10.2} {:>5} {:>13.4} {:>9.3} - {:<9.3} {:>11.4} m {:>15.4} m",
+            l.size_m, l.n, l.spacing_m, l.k_min, l.k_max, l.spectrum_rms_m, l.realization_rms_m
+        );
+    }
+    println!(
+        "  spectrum RMS      {:.4} m (over the layers' bands; model spectrum {:.4} m, amplitude scale {:.4})",
+        s.spectrum_rms_m, s.model_rms_m, s.amplitude_scale
+    );
+    println!(
+        "  realization RMS   {:.4} m (sampled surface {:.4} m)",
+        s.realization_rms_m, s.sampled_rms_m
+    );
+    println!("  Hs                {:.3} m", s.hs_m);
+    println!("  peak wavelength   {:.2} m", s.peak_wavelength_m);
+    println!("  folded fraction   {:.5}", s.folded_fraction);
+    println!("  generated in      {:.3} s", s.seconds);
+    if s.folded_fraction > 0.0 {
+        eprintln!(
+            "warning: {:.3}% of the surface folds over itself (Jacobian <= 0); lower --choppiness to avoid it",
+            100.0 * s.folded_fraction
+        );
+    }
+    if let Some(p) = &a.png {
+        println!("  preview           {}", p.display());
+    }
+    Ok(())
 }
 
 /// Errors in what the user gave us (exit code 2), as opposed to failures while running.
@@ -108,6 +234,7 @@ fn info(threads: usize, json: bool) -> Result<()> {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Info { threads, json } => info(threads, json),
+        Command::Ocean(a) => ocean(a),
         #[cfg(feature = "embree")]
         Command::Smoke {
             cells,

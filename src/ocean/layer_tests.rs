@@ -1,0 +1,309 @@
+//! Tests of [`super`] (the layer): oracles are the direct Fourier sum, finite differences and
+//! the spectrum's band integral.
+
+use super::*;
+use crate::ocean::{OceanParams, SpectrumKind, SpreadingKind};
+
+fn spectrum(p: &OceanParams) -> Spectrum {
+    Spectrum::new(p)
+}
+
+fn rms_of(layer: &Layer, j: usize) -> f64 {
+    let s: f64 = layer.fields().iter().map(|t| (t[j] as f64).powi(2)).sum();
+    (s / layer.fields().len() as f64).sqrt()
+}
+
+/// A 47.3 m layer of case 22 holding the band the default surface gives it, at n = 128.
+fn mid_layer(n: usize, seed: u64) -> Layer {
+    let p = OceanParams::default();
+    // the band spans a factor 8 up to half Nyquist, as the default 47.3 m / 512 layer's does
+    let band = (
+        4.0 * TAU / 47.3,
+        std::f64::consts::PI * n as f64 / 47.3 * 0.5,
+    );
+    Layer::new(&spectrum(&p), 47.3, n, band, 1.3, seed, 3.7).unwrap()
+}
+
+#[test]
+fn fft_matches_naive_dft() {
+    let p = OceanParams {
+        wind_speed: 12.0,
+        ..OceanParams::default()
+    };
+    let s = spectrum(&p);
+    let layer = Layer::new(&s, 60.0, 16, (0.0, 10.0), 1.3, 5, 3.7).unwrap();
+    let rms: Vec<f64> = (0..FIELD_COUNT).map(|j| rms_of(&layer, j)).collect();
+    assert!(rms.iter().all(|&r| r > 0.0), "{rms:?}");
+    for iz in 0..16 {
+        for ix in 0..16 {
+            let d = layer.eval_direct(ix as f64 * layer.dx(), iz as f64 * layer.dx());
+            let t = layer.fields()[iz * 16 + ix];
+            for j in 0..FIELD_COUNT {
+                assert!(
+                    (t[j] as f64 - d[j]).abs() < 1e-5 * rms[j],
+                    "field {j} at ({ix},{iz}): {} vs {}",
+                    t[j],
+                    d[j]
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn height_is_real() {
+    let layer = mid_layer(128, 11);
+    let c = layer.height_complex();
+    let rms = (c.iter().map(|v| (v.re as f64).powi(2)).sum::<f64>() / c.len() as f64).sqrt();
+    let imag = c.iter().map(|v| v.im.abs() as f64).fold(0.0, f64::max);
+    assert!(rms > 0.0);
+    println!("max |Im h| / rms = {:.2e}", imag / rms);
+    assert!(imag < 2e-6 * rms, "max |Im h| / rms = {}", imag / rms);
+    // and the packed transform put the same real part into field H
+    for (v, t) in c.iter().zip(layer.fields()) {
+        assert!((v.re - t[field::H]).abs() as f64 <= 1e-5 * rms);
+    }
+}
+
+#[test]
+fn fields_are_periodic() {
+    let layer = mid_layer(32, 2);
+    let l = layer.size_m();
+    for &(x, z) in &[(0.3, 7.1), (12.25, 40.0), (46.9, 0.01)] {
+        let a = layer.eval_direct(x, z);
+        let b = layer.eval_direct(x + l, z - 3.0 * l);
+        let (px, pz) = (x * layer.inv_dx(), z * layer.inv_dx());
+        let n = layer.n() as f64;
+        let (c, d) = (layer.bilinear(px, pz), layer.bilinear(px - n, pz + 2.0 * n));
+        let (e, f) = (layer.bicubic(px, pz), layer.bicubic(px + 5.0 * n, pz));
+        for j in 0..FIELD_COUNT {
+            let r = rms_of(&layer, j);
+            assert!((a[j] - b[j]).abs() < 1e-9 * r, "direct field {j}");
+            assert!((c[j] - d[j]).abs() as f64 <= 1e-6 * r, "bilinear field {j}");
+            assert!((e[j] - f[j]).abs() as f64 <= 1e-6 * r, "bicubic field {j}");
+        }
+    }
+    // across the seam (between the last and first texel) the reads are as good as inside
+    let line_error = |x: f64| {
+        let mut e = 0.0;
+        for k in 0..64 {
+            let z = k as f64 * 0.731;
+            let d = layer.eval_direct(x, z)[field::H];
+            let b = layer.bicubic(x * layer.inv_dx(), z * layer.inv_dx())[field::H] as f64;
+            e += (b - d).powi(2);
+        }
+        e.sqrt()
+    };
+    let (seam, inside) = (
+        line_error(l - 0.5 * layer.dx()),
+        line_error(0.5 * l - 0.5 * layer.dx()),
+    );
+    assert!(seam < 2.0 * inside + 1e-9, "seam {seam} vs inside {inside}");
+    assert!(seam < 0.05 * rms_of(&layer, field::H) * 8.0);
+}
+
+#[test]
+fn fft_gradients_match_finite_differences() {
+    let layer = mid_layer(64, 3);
+    let e = 1e-4 * layer.dx();
+    let pairs = [
+        (field::H, field::DH_DX, true),
+        (field::H, field::DH_DZ, false),
+        (field::DX, field::DDX_DX, true),
+        (field::DZ, field::DDZ_DZ, false),
+        (field::DX, field::DDX_DZ, false),
+        (field::DZ, field::DDX_DZ, true),
+    ];
+    let rms: Vec<f64> = (0..FIELD_COUNT).map(|j| rms_of(&layer, j)).collect();
+    for &(ix, iz) in &[(0, 0), (5, 17), (63, 31), (40, 2)] {
+        let (x, z) = (ix as f64 * layer.dx(), iz as f64 * layer.dx());
+        let t = layer.fields()[iz * 64 + ix];
+        for &(f, g, along_x) in &pairs {
+            let (dx, dz) = if along_x { (e, 0.0) } else { (0.0, e) };
+            let fd = (layer.eval_direct(x + dx, z + dz)[f] - layer.eval_direct(x - dx, z - dz)[f])
+                / (2.0 * e);
+            assert!(
+                (fd - t[g] as f64).abs() < 1e-4 * rms[g],
+                "d{f}/d{} at ({ix},{iz}): fd {fd} vs fft {}",
+                if along_x { "x" } else { "z" },
+                t[g]
+            );
+        }
+    }
+    // and on the grid itself: central differences of the sampled field over one texel
+    let n = layer.n();
+    let (mut err, mut norm) = (0.0, 0.0);
+    for iz in 0..n {
+        for ix in 0..n {
+            let f = |i: usize, k: usize| layer.fields()[(k % n) * n + (i % n)];
+            let cd =
+                (f(ix + 1, iz)[field::H] - f(ix + n - 1, iz)[field::H]) as f64 / (2.0 * layer.dx());
+            let g = f(ix, iz)[field::DH_DX] as f64;
+            err += (cd - g).powi(2);
+            norm += g * g;
+        }
+    }
+    let rel = (err / norm).sqrt();
+    // half-Nyquist band: sin(k dx)/(k dx) >= 0.64 at its edge, much better where energy is
+    assert!(rel < 0.15, "grid central difference vs FFT gradient: {rel}");
+}
+
+#[test]
+fn interpolation_error_against_direct_sum() {
+    let layer = mid_layer(128, 4);
+    let mut rng = ChaCha8Rng::seed_from_u64(99);
+    let mut err = [[0.0f64; 2]; 2];
+    let mut norm = [0.0f64; 2];
+    for _ in 0..400 {
+        let x = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 * layer.size_m();
+        let z = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 * layer.size_m();
+        let d = layer.eval_direct(x, z);
+        let (px, pz) = (x * layer.inv_dx(), z * layer.inv_dx());
+        for (m, interp) in [Interp::Bilinear, Interp::Bicubic].into_iter().enumerate() {
+            let r = layer.read(px, pz, interp);
+            for (q, j) in [field::H, field::DH_DX].into_iter().enumerate() {
+                err[m][q] += (r[j] as f64 - d[j]).powi(2);
+                if m == 0 {
+                    norm[q] += d[j] * d[j];
+                }
+            }
+        }
+    }
+    let rel = |m: usize, q: usize| (err[m][q] / norm[q]).sqrt();
+    println!(
+        "interp rms error / rms: h bilinear {:.2e} bicubic {:.2e}; dh/dx bilinear {:.2e} bicubic {:.2e}",
+        rel(0, 0),
+        rel(1, 0),
+        rel(0, 1),
+        rel(1, 1)
+    );
+    for q in 0..2 {
+        assert!(rel(1, q) < 0.5 * rel(0, q), "bicubic must beat bilinear");
+    }
+    assert!(rel(0, 0) < 0.05 && rel(1, 0) < 0.012);
+    assert!(rel(0, 1) < 0.12 && rel(1, 1) < 0.03);
+}
+
+#[test]
+fn variance_matches_band_integral_over_16_seeds() {
+    // Case 12 (lambda_p = 24 m) on 800 m: the peak spans many cells, so 16 seeds average
+    // out the chi-square scatter of the few hundred modes that hold the energy.
+    let p = OceanParams {
+        wind_speed: 1.3,
+        fetch_km: 194.8,
+        depth_m: 381.4,
+        spreading: SpreadingKind::DonelanBanner,
+        ..OceanParams::default()
+    };
+    let s = spectrum(&p);
+    let (size, n) = (800.0, 256);
+    let band = (
+        std::f64::consts::PI / size,
+        0.5 * std::f64::consts::PI * n as f64 / size,
+    );
+    let integral = s.band_variance(band.0, band.1);
+    let mut mean = 0.0;
+    for seed in 0..16 {
+        let layer = Layer::new(&s, size, n, band, 0.0, seed, 0.0).unwrap();
+        assert!((layer.expected_variance() / integral - 1.0).abs() < 0.01);
+        mean += layer.height_variance() / 16.0;
+    }
+    println!(
+        "16-seed mean variance / band integral = {:.4}",
+        mean / integral
+    );
+    assert!(
+        (mean / integral - 1.0).abs() < 0.05,
+        "realization {mean} vs spectrum {integral}"
+    );
+}
+
+#[test]
+fn grid_sum_matches_band_integral() {
+    // The sum of P dk^2 over the grid (the expected variance, no random draw) against the
+    // band integral, on the default 400 m layer where the case-22 peak is only ~1 cell wide
+    // radially, and for case 12 whose Mitsuyasu spreading is ~1 cell wide in angle.
+    for p in [
+        OceanParams::default(),
+        OceanParams {
+            wind_speed: 1.3,
+            fetch_km: 194.8,
+            depth_m: 381.4,
+            ..OceanParams::default()
+        },
+    ] {
+        let s = spectrum(&p);
+        let band = p.bands()[0];
+        let layer = Layer::new(&s, 400.0, 512, band, 1.0, 1, 0.0).unwrap();
+        let ratio = layer.expected_variance() / s.band_variance(band.0, band.1);
+        println!("grid sum / band integral = {ratio:.5}");
+        assert!((ratio - 1.0).abs() < 0.005, "{ratio}");
+    }
+}
+
+#[test]
+fn waves_travel_downwind() {
+    for wind_dir_deg in [0.0, 90.0, 200.0] {
+        let p = OceanParams {
+            wind_dir_deg,
+            spectrum: SpectrumKind::Jonswap,
+            ..OceanParams::default()
+        };
+        let s = spectrum(&p);
+        let mut a = Layer::new(&s, 400.0, 128, (0.0, 2.0), 0.0, 8, 10.0).unwrap();
+        let h0: Vec<f32> = a.fields().iter().map(|t| t[field::H]).collect();
+        let grad: Vec<(f32, f32)> = a
+            .fields()
+            .iter()
+            .map(|t| (t[field::DH_DX], t[field::DH_DZ]))
+            .collect();
+        a.compute_fields(10.05);
+        // dh/dt = -c . grad h for a pattern moving with velocity c
+        let (wx, wz) = (
+            wind_dir_deg.to_radians().cos() as f32,
+            wind_dir_deg.to_radians().sin() as f32,
+        );
+        let mut corr = 0.0f64;
+        let mut norm = (0.0f64, 0.0f64);
+        for ((t, h), g) in a.fields().iter().zip(&h0).zip(&grad) {
+            let dhdt = t[field::H] - h;
+            let along = g.0 * wx + g.1 * wz;
+            corr += (dhdt * along) as f64;
+            norm.0 += (dhdt * dhdt) as f64;
+            norm.1 += (along * along) as f64;
+        }
+        let c = corr / (norm.0 * norm.1).sqrt();
+        assert!(
+            c < -0.8,
+            "wind {wind_dir_deg}: corr(dh/dt, downwind slope) = {c}"
+        );
+    }
+}
+
+#[test]
+fn choppiness_sharpens_crests() {
+    let layer = mid_layer(64, 6);
+    // horizontal divergence is negative (points converge) where h is high
+    let (mut c, mut nh, mut nd) = (0.0f64, 0.0f64, 0.0f64);
+    for t in layer.fields() {
+        let div = (t[field::DDX_DX] + t[field::DDZ_DZ]) as f64;
+        c += t[field::H] as f64 * div;
+        nh += (t[field::H] as f64).powi(2);
+        nd += div * div;
+    }
+    assert!(c / (nh * nd).sqrt() < -0.5);
+    // J is 1 without choppiness
+    let p = OceanParams::default();
+    let flat_j = Layer::new(&spectrum(&p), 47.3, 32, (2.0, 8.0), 0.0, 6, 0.0).unwrap();
+    assert!(flat_j.fields().iter().all(|t| jacobian(t) == 1.0));
+    assert_eq!(flat_j.folded_fraction(), 0.0);
+}
+
+#[test]
+fn seed_determines_the_realization() {
+    let a = mid_layer(32, 21);
+    let b = mid_layer(32, 21);
+    let c = mid_layer(32, 22);
+    assert_eq!(a.fields(), b.fields());
+    assert_ne!(a.fields(), c.fields());
+}

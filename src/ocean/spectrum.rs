@@ -1,0 +1,532 @@
+//! Sea-state spectra and the wavevector spectrum P(k) whose random realization is h0(k) of
+//! paper eq. 2. Frequency spectra S(omega): JONSWAP with fetch-limited parameters
+//! (Hasselmann et al. 1973: alpha = 0.076 (U^2/(F g))^0.22, omega_p = 22 (g^2/(U F))^(1/3),
+//! sigma 0.07/0.09), TMA = JONSWAP x Kitaigorodskii's depth factor (Bouws et al. 1985, the
+//! spectrum of the paper's Table 1), Pierson-Moskowitz and Phillips (Tessendorf's, rewritten in
+//! omega). Spreading D(theta; omega): Mitsuyasu cos-2s and Donelan-Banner sech^2 (as collected by
+//! Horvath 2015), cos^2 and uniform. Finite-depth dispersion omega^2 = g k tanh(k h), and
+//! P(k) = S(omega(k)) D(theta) (d omega / d k) / k, so that the integral of P over the plane is
+//! the integral of S over omega (Massel 1996, ch. 3).
+
+use std::f64::consts::{PI, TAU};
+
+use super::{OceanParams, SpectrumKind, SpreadingKind};
+
+/// Standard gravity, m/s^2.
+pub const G: f64 = 9.81;
+
+/// Phillips' saturation constant, used by the Pierson-Moskowitz and Phillips spectra.
+pub const PHILLIPS_ALPHA: f64 = 0.0081;
+
+/// Angular frequency of a wave of wavenumber `k` on water `depth` deep: omega^2 = g k tanh(k h).
+pub fn dispersion(k: f64, depth: f64) -> f64 {
+    (G * k * (k * depth).tanh()).sqrt()
+}
+
+/// d omega / d k of [`dispersion`] (the group velocity).
+pub fn group_velocity(k: f64, depth: f64) -> f64 {
+    let kh = k * depth;
+    let t = kh.tanh();
+    let w = (G * k * t).sqrt();
+    if w == 0.0 {
+        // k -> 0: omega ~ k sqrt(g h)
+        return (G * depth).sqrt();
+    }
+    G * (t + kh * (1.0 - t * t)) / (2.0 * w)
+}
+
+/// Inverse of [`dispersion`]: the wavenumber with angular frequency `omega`.
+pub fn wavenumber(omega: f64, depth: f64) -> f64 {
+    if omega <= 0.0 {
+        return 0.0;
+    }
+    // tanh x <= min(x, 1) and tanh x >= tanh(1) min(x, 1) bracket the root.
+    let t1 = 1f64.tanh();
+    let mut lo = (omega * omega / G).max(omega / (G * depth).sqrt());
+    let mut hi = (omega * omega / (G * t1)).max(omega / (G * depth * t1).sqrt());
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if dispersion(mid, depth) < omega {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+        if hi - lo <= 1e-15 * hi {
+            break;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Kitaigorodskii's depth factor Phi(omega_h), omega_h = omega sqrt(h/g) (Bouws et al. 1985).
+pub fn kitaigorodskii(omega_h: f64) -> f64 {
+    if omega_h <= 1.0 {
+        0.5 * omega_h * omega_h
+    } else if omega_h < 2.0 {
+        1.0 - 0.5 * (2.0 - omega_h) * (2.0 - omega_h)
+    } else {
+        1.0
+    }
+}
+
+/// JONSWAP (alpha, omega_p) for wind speed `u` (m/s) over fetch `fetch_m` (m).
+pub fn jonswap_parameters(u: f64, fetch_m: f64) -> (f64, f64) {
+    let alpha = 0.076 * (u * u / (fetch_m * G)).powf(0.22);
+    let omega_p = 22.0 * (G * G / (u * fetch_m)).cbrt();
+    (alpha, omega_p)
+}
+
+/// JONSWAP S(omega), m^2 s.
+pub fn jonswap(omega: f64, alpha: f64, omega_p: f64, gamma: f64) -> f64 {
+    if omega <= 0.0 {
+        return 0.0;
+    }
+    let sigma = if omega <= omega_p { 0.07 } else { 0.09 };
+    let d = (omega - omega_p) / (sigma * omega_p);
+    let r = (-0.5 * d * d).exp();
+    pierson_moskowitz_shape(omega, alpha, omega_p) * gamma.powf(r)
+}
+
+/// alpha g^2 omega^-5 exp(-5/4 (omega_p/omega)^4): Pierson-Moskowitz, JONSWAP without the peak.
+pub fn pierson_moskowitz_shape(omega: f64, alpha: f64, omega_p: f64) -> f64 {
+    if omega <= 0.0 {
+        return 0.0;
+    }
+    let q = omega_p / omega;
+    let q4 = (q * q) * (q * q);
+    alpha * G * G / omega.powi(5) * (-1.25 * q4).exp()
+}
+
+/// ln Gamma(x) for x > 0 (Lanczos, g = 7, n = 9; ~1e-15 relative).
+pub fn ln_gamma(x: f64) -> f64 {
+    const C: [f64; 9] = [
+        0.999_999_999_999_809_9,
+        676.520_368_121_885_1,
+        -1_259.139_216_722_402_8,
+        771.323_428_777_653_1,
+        -176.615_029_162_140_6,
+        12.507_343_278_686_905,
+        -0.138_571_095_265_720_12,
+        9.984_369_578_019_572e-6,
+        1.505_632_735_149_311_6e-7,
+    ];
+    if x < 0.5 {
+        // reflection keeps the series in its accurate range
+        return (PI / (PI * x).sin()).ln() - ln_gamma(1.0 - x);
+    }
+    let x = x - 1.0;
+    let mut a = C[0];
+    let t = x + 7.5;
+    for (i, c) in C.iter().enumerate().skip(1) {
+        a += c / (x + i as f64);
+    }
+    0.5 * TAU.ln() + (x + 0.5) * t.ln() - t + a.ln()
+}
+
+/// cos-2s spreading Q(s) |cos(theta/2)|^(2s), normalised over [-pi, pi].
+pub fn cos_2s(theta: f64, s: f64) -> f64 {
+    let ln_q =
+        (2.0 * s - 1.0) * 2f64.ln() - PI.ln() + 2.0 * ln_gamma(s + 1.0) - ln_gamma(2.0 * s + 1.0);
+    let c = (0.5 * theta).cos().abs();
+    if c == 0.0 {
+        return if s == 0.0 { ln_q.exp() } else { 0.0 };
+    }
+    (ln_q + 2.0 * s * c.ln()).exp()
+}
+
+/// Mitsuyasu's exponent s(omega) (Mitsuyasu et al. 1975, as in Horvath 2015 eq. 33-34).
+pub fn mitsuyasu_s(omega: f64, omega_p: f64, u: f64) -> f64 {
+    let s_p = 11.5 * (G / (omega_p * u)).powf(2.5);
+    let r = omega / omega_p;
+    if r <= 1.0 {
+        s_p * r.powi(5)
+    } else {
+        s_p * r.powf(-2.5)
+    }
+}
+
+/// Donelan-Banner beta(omega / omega_p).
+pub fn donelan_banner_beta(r: f64) -> f64 {
+    if r < 0.95 {
+        2.61 * r.powf(1.3)
+    } else if r < 1.6 {
+        2.28 * r.powf(-1.3)
+    } else {
+        10f64.powf(-0.4 + 0.8393 * (-0.567 * (r * r).ln()).exp())
+    }
+}
+
+/// Donelan-Banner spreading beta / (2 tanh(beta pi)) sech^2(beta theta), normalised over [-pi, pi].
+pub fn donelan_banner(theta: f64, beta: f64) -> f64 {
+    if beta < 1e-9 {
+        return 1.0 / TAU;
+    }
+    let sech = 1.0 / (beta * theta).cosh();
+    beta / (2.0 * (beta * PI).tanh()) * sech * sech
+}
+
+/// Wraps an angle into [-pi, pi).
+fn wrap_angle(a: f64) -> f64 {
+    (a + PI).rem_euclid(TAU) - PI
+}
+
+/// A sea state: S(omega), D(theta; omega) and the dispersion relation, ready to give P(k).
+#[derive(Clone, Debug)]
+pub struct Spectrum {
+    pub kind: SpectrumKind,
+    pub spreading: SpreadingKind,
+    pub wind_speed: f64,
+    pub fetch_m: f64,
+    pub depth_m: f64,
+    pub gamma: f64,
+    /// Direction the wind blows towards, radians from +x towards +z.
+    pub wind_dir_rad: f64,
+    /// Energy level of S (alpha of JONSWAP / PM / Phillips).
+    pub alpha: f64,
+    /// Peak angular frequency of S(omega), rad/s.
+    pub omega_p: f64,
+    /// Frequency that sets the low-frequency cut-off exp(-c (omega_c/omega)^4).
+    omega_cut: f64,
+}
+
+impl Spectrum {
+    /// The spectrum of `params` (which should have been validated).
+    pub fn new(params: &OceanParams) -> Spectrum {
+        let u = params.wind_speed;
+        let fetch_m = params.fetch_km * 1000.0;
+        let (alpha, omega_p, omega_cut) = match params.spectrum {
+            SpectrumKind::Tma | SpectrumKind::Jonswap => {
+                let (a, wp) = jonswap_parameters(u, fetch_m);
+                (a, wp, wp)
+            }
+            // omega_p = 0.855 g / U10 (Horvath 2015 eq. 21)
+            SpectrumKind::PiersonMoskowitz => (PHILLIPS_ALPHA, 0.855 * G / u, 0.855 * G / u),
+            // exp(-1/(k L)^2) with L = U^2/g is exp(-(g/(U omega))^4) in deep water; the peak of
+            // omega^-5 exp(-(w0/omega)^4) is at (4/5)^(1/4) w0.
+            SpectrumKind::Phillips => (PHILLIPS_ALPHA, 0.8f64.powf(0.25) * G / u, G / u),
+        };
+        Spectrum {
+            kind: params.spectrum,
+            spreading: params.spreading,
+            wind_speed: u,
+            fetch_m,
+            depth_m: params.depth_m,
+            gamma: params.gamma,
+            wind_dir_rad: params.wind_dir_deg.to_radians(),
+            alpha,
+            omega_p,
+            omega_cut,
+        }
+    }
+
+    /// Frequency spectrum S(omega), m^2 s: the variance is its integral over omega > 0.
+    pub fn s_omega(&self, omega: f64) -> f64 {
+        match self.kind {
+            SpectrumKind::Jonswap => jonswap(omega, self.alpha, self.omega_p, self.gamma),
+            SpectrumKind::Tma => {
+                let wh = omega * (self.depth_m / G).sqrt();
+                jonswap(omega, self.alpha, self.omega_p, self.gamma) * kitaigorodskii(wh)
+            }
+            SpectrumKind::PiersonMoskowitz => {
+                pierson_moskowitz_shape(omega, self.alpha, self.omega_p)
+            }
+            SpectrumKind::Phillips => {
+                if omega <= 0.0 {
+                    return 0.0;
+                }
+                let q = self.omega_cut / omega;
+                self.alpha * G * G / omega.powi(5) * (-(q * q) * (q * q)).exp()
+            }
+        }
+    }
+
+    /// Directional spreading D(theta; omega), theta measured from the downwind direction.
+    pub fn spreading_at(&self, omega: f64, theta: f64) -> f64 {
+        match self.spreading {
+            SpreadingKind::Mitsuyasu => {
+                cos_2s(theta, mitsuyasu_s(omega, self.omega_p, self.wind_speed))
+            }
+            SpreadingKind::DonelanBanner => {
+                donelan_banner(theta, donelan_banner_beta(omega / self.omega_p))
+            }
+            SpreadingKind::Cos2 => {
+                let c = theta.cos();
+                if c > 0.0 { 2.0 / PI * c * c } else { 0.0 }
+            }
+            SpreadingKind::Uniform => 1.0 / TAU,
+        }
+    }
+
+    /// omega(k) with this sea's depth.
+    pub fn omega(&self, k: f64) -> f64 {
+        dispersion(k, self.depth_m)
+    }
+
+    /// Wavevector spectrum P(k), m^4: P = S(omega) D(theta) (d omega/d k) / k.
+    pub fn p_k(&self, kx: f64, kz: f64) -> f64 {
+        let k = kx.hypot(kz);
+        if k == 0.0 {
+            return 0.0;
+        }
+        let omega = self.omega(k);
+        let s = self.s_omega(omega);
+        if s == 0.0 {
+            return 0.0;
+        }
+        let theta = wrap_angle(kz.atan2(kx) - self.wind_dir_rad);
+        s * self.spreading_at(omega, theta) * group_velocity(k, self.depth_m) / k
+    }
+
+    /// Wavenumber of the spectral peak, rad/m.
+    pub fn peak_wavenumber(&self) -> f64 {
+        wavenumber(self.omega_p, self.depth_m)
+    }
+
+    /// Integral of P(k) over the annulus k_min <= |k| < k_max, m^2. D integrates to one over
+    /// the circle, so this is the integral of S over [omega(k_min), omega(k_max)) (Gauss-Legendre
+    /// on panels of 0.005 in ln omega: the JONSWAP peak is ~0.07 wide there).
+    pub fn band_variance(&self, k_min: f64, k_max: f64) -> f64 {
+        let lo = self.omega(k_min).max(0.05 * self.omega_cut);
+        // above 1e4 omega_p the omega^-5 tail holds 1e-16 of the variance
+        let hi = self.omega(k_max).min(1e4 * self.omega_p);
+        if hi.is_nan() || lo.is_nan() || hi <= lo {
+            return 0.0;
+        }
+        integrate_log(|w| self.s_omega(w), lo, hi, 0.005)
+    }
+
+    /// Variance of the whole spectrum, m^2.
+    pub fn total_variance(&self) -> f64 {
+        self.band_variance(0.0, f64::INFINITY)
+    }
+}
+
+/// Integral of f over [lo, hi] (lo > 0) by 5-point Gauss-Legendre on panels of width `du` in
+/// u = ln x.
+pub fn integrate_log(f: impl Fn(f64) -> f64, lo: f64, hi: f64, du: f64) -> f64 {
+    const X: [f64; 5] = [
+        0.0,
+        -0.538_469_310_105_683_1,
+        0.538_469_310_105_683_1,
+        -0.906_179_845_938_664,
+        0.906_179_845_938_664,
+    ];
+    const W: [f64; 5] = [
+        0.568_888_888_888_888_9,
+        0.478_628_670_499_366_5,
+        0.478_628_670_499_366_5,
+        0.236_926_885_056_189_1,
+        0.236_926_885_056_189_1,
+    ];
+    let (a, b) = (lo.ln(), hi.ln());
+    let panels = ((b - a) / du).ceil().max(1.0) as usize;
+    let h = (b - a) / panels as f64;
+    let mut sum = 0.0;
+    for p in 0..panels {
+        let mid = a + (p as f64 + 0.5) * h;
+        for (x, w) in X.iter().zip(W) {
+            let u = mid + 0.5 * h * x;
+            let e = u.exp();
+            sum += w * f(e) * e;
+        }
+    }
+    sum * 0.5 * h
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn case22(kind: SpectrumKind) -> OceanParams {
+        OceanParams {
+            spectrum: kind,
+            ..OceanParams::default()
+        }
+    }
+
+    /// Integral of P(k) over the plane on a polar grid: checks the Jacobian and D's normalisation
+    /// independently of `band_variance`.
+    fn polar_integral(s: &Spectrum, k_lo: f64, k_hi: f64) -> f64 {
+        let n_theta = 1440;
+        let dth = TAU / n_theta as f64;
+        integrate_log(
+            |k| {
+                let mut ring = 0.0;
+                for j in 0..n_theta {
+                    let th = -PI + (j as f64 + 0.5) * dth;
+                    ring += s.p_k(k * th.cos(), k * th.sin());
+                }
+                ring * dth * k
+            },
+            k_lo,
+            k_hi,
+            0.01,
+        )
+    }
+
+    #[test]
+    fn dispersion_limits_and_inverse() {
+        // deep: omega^2 = g k; shallow: omega = k sqrt(g h)
+        let k = 0.5;
+        assert!((dispersion(k, 1e4) - (G * k).sqrt()).abs() < 1e-12);
+        let k = 1e-4;
+        assert!((dispersion(k, 2.0) / (k * (G * 2.0).sqrt()) - 1.0).abs() < 1e-7);
+        for &(k, h) in &[(0.01, 5.0), (0.3, 20.0), (2.0, 1000.0), (0.05, 150.9)] {
+            let e = 1e-6 * k;
+            let fd = (dispersion(k + e, h) - dispersion(k - e, h)) / (2.0 * e);
+            assert!((group_velocity(k, h) / fd - 1.0).abs() < 1e-7, "{k} {h}");
+            assert!((wavenumber(dispersion(k, h), h) / k - 1.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn kitaigorodskii_is_continuous_piecewise() {
+        assert_eq!(kitaigorodskii(0.0), 0.0);
+        assert_eq!(kitaigorodskii(1.0), 0.5);
+        assert_eq!(kitaigorodskii(2.0), 1.0);
+        assert_eq!(kitaigorodskii(7.0), 1.0);
+        for &x in &[1.0, 2.0] {
+            assert!((kitaigorodskii(x - 1e-9) - kitaigorodskii(x + 1e-9)).abs() < 1e-8);
+        }
+        assert!((kitaigorodskii(1.5) - 0.875).abs() < 1e-15);
+    }
+
+    #[test]
+    fn jonswap_peaks_at_omega_p_with_gamma_enhancement() {
+        let (a, wp) = jonswap_parameters(4.16, 204_500.0);
+        // case 22 by hand: (U^2/(F g))^0.22 and (g^2/(U F))^(1/3)
+        assert!((a - 0.076 * (4.16f64.powi(2) / (204_500.0 * 9.81)).powf(0.22)).abs() < 1e-15);
+        assert!((wp - 1.0637).abs() < 1e-3, "{wp}");
+        let mut best = (0.0, 0.0);
+        for i in 1..20_000 {
+            let w = wp * (0.5 + i as f64 * 1e-4);
+            let s = jonswap(w, a, wp, 3.3);
+            if s > best.1 {
+                best = (w, s);
+            }
+        }
+        assert!((best.0 / wp - 1.0).abs() < 2e-3, "{}", best.0 / wp);
+        let ratio = jonswap(wp, a, wp, 3.3) / pierson_moskowitz_shape(wp, a, wp);
+        assert!((ratio - 3.3).abs() < 1e-12);
+    }
+
+    #[test]
+    fn spreading_functions_are_normalised() {
+        for spreading in [
+            SpreadingKind::Mitsuyasu,
+            SpreadingKind::DonelanBanner,
+            SpreadingKind::Cos2,
+            SpreadingKind::Uniform,
+        ] {
+            let s = Spectrum::new(&OceanParams {
+                spreading,
+                ..OceanParams::default()
+            });
+            for r in [0.3, 0.8, 1.0, 1.3, 3.0, 20.0] {
+                let w = r * s.omega_p;
+                let n = 200_000;
+                let d = TAU / n as f64;
+                let sum: f64 = (0..n)
+                    .map(|j| s.spreading_at(w, -PI + (j as f64 + 0.5) * d))
+                    .sum::<f64>()
+                    * d;
+                assert!((sum - 1.0).abs() < 1e-6, "{spreading:?} r={r}: {sum}");
+                assert!(s.spreading_at(w, 0.0) >= s.spreading_at(w, 2.0));
+            }
+        }
+        assert!((ln_gamma(5.0) - 24f64.ln()).abs() < 1e-13);
+        assert!((ln_gamma(0.5) - PI.sqrt().ln()).abs() < 1e-13);
+    }
+
+    #[test]
+    fn tma_full_band_variance_gamma1_matches_closed_form() {
+        // With gamma = 1 JONSWAP integrates to alpha g^2 / (5 omega_p^4); at 998 m depth the
+        // Kitaigorodskii factor is 1 wherever S is not negligible. The P(k) plane integral goes
+        // through the finite-depth Jacobian and D(theta).
+        for spreading in [SpreadingKind::Mitsuyasu, SpreadingKind::DonelanBanner] {
+            let p = OceanParams {
+                gamma: 1.0,
+                spreading,
+                ..case22(SpectrumKind::Tma)
+            };
+            let s = Spectrum::new(&p);
+            let closed = s.alpha * G * G / (5.0 * s.omega_p.powi(4));
+            let plane = polar_integral(&s, 1e-3, 1e3);
+            assert!(
+                (plane / closed - 1.0).abs() < 0.01,
+                "{spreading:?}: {plane} vs {closed}"
+            );
+            assert!((s.total_variance() / closed - 1.0).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn plane_integral_equals_band_variance_in_shallow_water() {
+        // Case 34-like shallow sea: the Jacobian differs from deep water here.
+        let p = OceanParams {
+            depth_m: 8.0,
+            ..case22(SpectrumKind::Tma)
+        };
+        let s = Spectrum::new(&p);
+        let (lo, hi) = (0.05, 3.0);
+        let a = polar_integral(&s, lo, hi);
+        let b = s.band_variance(lo, hi);
+        assert!((a / b - 1.0).abs() < 1e-3, "{a} vs {b}");
+    }
+
+    #[test]
+    fn deep_water_tma_equals_jonswap() {
+        let deep = |kind| {
+            Spectrum::new(&OceanParams {
+                depth_m: 10_000.0,
+                ..case22(kind)
+            })
+        };
+        let (t, j) = (deep(SpectrumKind::Tma), deep(SpectrumKind::Jonswap));
+        for i in 0..400 {
+            let w = 0.2 * 1.02f64.powi(i);
+            assert_eq!(t.s_omega(w), j.s_omega(w), "omega {w}");
+        }
+        for i in 0..100 {
+            let k = 0.01 * 1.1f64.powi(i);
+            assert_eq!(t.p_k(k * 0.6, k * 0.8), j.p_k(k * 0.6, k * 0.8));
+        }
+        assert!((t.total_variance() / j.total_variance() - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn shallow_water_attenuates_tma() {
+        let shallow = Spectrum::new(&OceanParams {
+            depth_m: 5.0,
+            ..case22(SpectrumKind::Tma)
+        });
+        let j = Spectrum::new(&OceanParams {
+            depth_m: 5.0,
+            ..case22(SpectrumKind::Jonswap)
+        });
+        let ratio = shallow.total_variance() / j.total_variance();
+        assert!(ratio < 0.9 && ratio > 0.1, "{ratio}");
+    }
+
+    #[test]
+    fn pm_and_phillips_peak_where_stated() {
+        for kind in [SpectrumKind::PiersonMoskowitz, SpectrumKind::Phillips] {
+            let s = Spectrum::new(&case22(kind));
+            let f = |r: f64| s.s_omega(s.omega_p * r);
+            assert!(f(1.0) > f(0.99) && f(1.0) > f(1.01), "{kind:?}");
+            assert!(s.total_variance() > 0.0);
+        }
+    }
+
+    #[test]
+    fn energy_is_downwind() {
+        let s = Spectrum::new(&OceanParams {
+            wind_dir_deg: 90.0,
+            ..case22(SpectrumKind::Tma)
+        });
+        let k = s.peak_wavenumber();
+        // wind towards +z
+        assert!(s.p_k(0.0, k) > 100.0 * s.p_k(k, 0.0));
+        assert!(s.p_k(0.0, k) > 100.0 * s.p_k(0.0, -k));
+    }
+}
