@@ -4,6 +4,9 @@
 //! architecture; each module's own doc says which part of the paper it implements.
 
 pub mod accel;
+pub mod analysis;
+pub mod image_io;
 pub mod mesh;
 pub mod ocean;
+pub mod render;
 pub mod rng;

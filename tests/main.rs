@@ -3,3 +3,5 @@
 mod common;
 #[cfg(feature = "embree")]
 mod embree;
+#[cfg(feature = "embree")]
+mod render;

@@ -1,0 +1,219 @@
+//! Image files: linear-RGB OpenEXR (exr crate) read and write, tone-mapped sRGB PNG previews,
+//! and JSON sidecars. Every writer goes through [`write_atomically`]: the file appears under its
+//! final name complete or not at all (DESIGN.md, Errors: never a partial output file).
+
+use std::fs;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use thiserror::Error;
+
+#[derive(Debug, Error)]
+pub enum ImageError {
+    #[error("cannot write {}: {source}", path.display())]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("cannot read {}: {message}", path.display())]
+    Read { path: PathBuf, message: String },
+    #[error("{}: {message}", path.display())]
+    Invalid { path: PathBuf, message: String },
+}
+
+/// A linear-RGB image, row-major from the top-left pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbImage {
+    pub width: usize,
+    pub height: usize,
+    pub pixels: Vec<[f32; 3]>,
+}
+
+impl RgbImage {
+    pub fn new(width: usize, height: usize) -> RgbImage {
+        RgbImage {
+            width,
+            height,
+            pixels: vec![[0.0; 3]; width * height],
+        }
+    }
+    #[inline]
+    pub fn get(&self, x: usize, y: usize) -> [f32; 3] {
+        self.pixels[y * self.width + x]
+    }
+}
+
+/// Writes `path` through a sibling temporary file that is renamed into place on success.
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<fs::File>) -> std::io::Result<()>,
+) -> Result<(), ImageError> {
+    let err = |source| ImageError::Write {
+        path: path.to_path_buf(),
+        source,
+    };
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        fs::create_dir_all(dir).map_err(err)?;
+    }
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(format!(".tmp{}", std::process::id()));
+    let tmp = PathBuf::from(tmp);
+    let result = (|| {
+        let mut w = BufWriter::new(fs::File::create(&tmp)?);
+        write(&mut w)?;
+        w.flush()?;
+        w.get_ref().sync_all()?;
+        drop(w);
+        fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result.map_err(err)
+}
+
+/// Writes a linear-RGB EXR (32-bit float channels R, G, B; ZIP compression).
+pub fn write_exr(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
+    use exr::prelude::*;
+    let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+        let c = img.get(p.x(), p.y());
+        (c[0], c[1], c[2])
+    });
+    let mut layer = Layer::new(
+        (img.width, img.height),
+        LayerAttributes::default(),
+        Encoding::SMALL_LOSSLESS,
+        channels,
+    );
+    layer.encoding.compression = Compression::ZIP16;
+    let image = Image::from_layer(layer);
+    write_atomically(path, |w| {
+        image
+            .write()
+            .to_buffered(w)
+            .map_err(|e| std::io::Error::other(e.to_string()))
+    })
+}
+
+/// Reads the RGB channels of the first layer of an EXR file as linear f32.
+pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
+    use exr::prelude::*;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |res: Vec2<usize>, _| RgbImage::new(res.width(), res.height()),
+        |img: &mut RgbImage, p: Vec2<usize>, (r, g, b, _a): (f32, f32, f32, f32)| {
+            let w = img.width;
+            img.pixels[p.y() * w + p.x()] = [r, g, b];
+        },
+    )
+    .map_err(|e| ImageError::Read {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    Ok(image.layer_data.channel_data.pixels)
+}
+
+/// sRGB transfer function of a linear value in [0, 1].
+fn srgb_encode(x: f32) -> f32 {
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Tone-maps linear RGB to 8-bit sRGB: exposure scaling, then the ACES filmic curve fit of
+/// Narkowicz (2015), then the sRGB transfer function.
+pub fn tonemap(c: [f32; 3], exposure: f32) -> [u8; 3] {
+    c.map(|v| {
+        let x = (v * exposure).max(0.0);
+        let y = (x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14);
+        (srgb_encode(y.clamp(0.0, 1.0)) * 255.0 + 0.5) as u8
+    })
+}
+
+/// An exposure that maps the image's median luminance to mid grey (0.18): previews of very
+/// different skies all come out readable.
+pub fn auto_exposure(img: &RgbImage) -> f32 {
+    let mut lum: Vec<f32> = img
+        .pixels
+        .iter()
+        .map(|&c| crate::analysis::luminance(c))
+        .filter(|l| l.is_finite() && *l > 0.0)
+        .collect();
+    if lum.is_empty() {
+        return 1.0;
+    }
+    let mid = lum.len() / 2;
+    let (_, median, _) = lum.select_nth_unstable_by(mid, f32::total_cmp);
+    0.18 / *median
+}
+
+/// Writes an 8-bit sRGB PNG preview of a linear image.
+pub fn write_png(path: &Path, img: &RgbImage, exposure: f32) -> Result<(), ImageError> {
+    let mut bytes = Vec::with_capacity(img.width * img.height * 3);
+    for &c in &img.pixels {
+        bytes.extend_from_slice(&tonemap(c, exposure));
+    }
+    write_png_rgb8(path, img.width as u32, img.height as u32, &bytes)
+}
+
+/// Writes raw 8-bit RGB rows as a PNG.
+pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), ImageError> {
+    write_atomically(path, |w| {
+        let mut enc = png::Encoder::new(w, width, height);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        let mut writer = enc.write_header().map_err(std::io::Error::other)?;
+        writer
+            .write_image_data(rgb)
+            .map_err(std::io::Error::other)?;
+        writer.finish().map_err(std::io::Error::other)
+    })
+}
+
+/// Writes a value as pretty JSON.
+pub fn write_json(path: &Path, value: &impl serde::Serialize) -> Result<(), ImageError> {
+    write_atomically(path, |w| {
+        serde_json::to_writer_pretty(&mut *w, value).map_err(std::io::Error::other)?;
+        w.write_all(b"\n")
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exr_round_trip_is_lossless_for_f32() {
+        let dir = std::env::temp_dir().join(format!("vastocean-exr-{}", std::process::id()));
+        let path = dir.join("t.exr");
+        let mut img = RgbImage::new(7, 3);
+        for (i, p) in img.pixels.iter_mut().enumerate() {
+            *p = [i as f32 * 0.1, 1e-7 * i as f32, 12345.678 + i as f32];
+        }
+        write_exr(&path, &img).unwrap();
+        assert_eq!(read_exr(&path).unwrap(), img);
+        let _ = fs::remove_dir_all(dir);
+    }
+
+    #[test]
+    fn failed_write_leaves_no_file() {
+        let dir = std::env::temp_dir().join(format!("vastocean-atomic-{}", std::process::id()));
+        let path = dir.join("x.json");
+        let r = write_atomically(&path, |_| Err(std::io::Error::other("boom")));
+        assert!(r.is_err());
+        assert!(!path.exists());
+        assert_eq!(fs::read_dir(&dir).unwrap().count(), 0, "temp file removed");
+        let _ = fs::remove_dir_all(dir);
+    }
+
+    #[test]
+    fn tonemap_is_monotonic_and_bounded() {
+        let a = tonemap([0.0, 0.1, 100.0], 1.0);
+        assert_eq!(a[0], 0);
+        assert!(a[1] > 0 && a[2] == 255);
+        assert!(tonemap([0.2; 3], 1.0)[0] < tonemap([0.3; 3], 1.0)[0]);
+    }
+}

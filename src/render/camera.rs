@@ -1,0 +1,161 @@
+//! Cameras: the paper's equirectangular 360 x 180 degree camera (optionally restricted to an
+//! elevation band, so near-horizon studies do not pay for the whole sphere) and a pinhole
+//! perspective camera. Directions are y-up; azimuth 0 looks along +x, 90 degrees along +z.
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+/// Which camera and its parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Projection {
+    /// Full sphere; `band_deg = Some((top, bottom))` renders only elevations from `top` down to
+    /// `bottom` degrees (e.g. (1, -6)) at the full-sphere pixel pitch.
+    Equirect { band_deg: Option<(f64, f64)> },
+    /// Pinhole with horizontal field of view, looking at azimuth `yaw_deg`, elevation `pitch_deg`.
+    Pinhole {
+        hfov_deg: f64,
+        yaw_deg: f64,
+        pitch_deg: f64,
+    },
+}
+
+/// A camera with its image size. For the equirectangular camera `width` is the full 360 degree
+/// width; the full-sphere height is `width / 2` and `height` is the band's row count.
+#[derive(Clone, Copy, Debug)]
+pub struct Camera {
+    pub projection: Projection,
+    pub width: usize,
+    pub height: usize,
+    /// First full-sphere row of the band (0 without a band).
+    row0: usize,
+}
+
+impl Camera {
+    /// Builds the camera for an image `width` pixels wide. For the pinhole, `aspect` = width /
+    /// height; the equirectangular camera derives its height from the band.
+    pub fn new(projection: Projection, width: usize, aspect: f64) -> Camera {
+        match projection {
+            Projection::Equirect { band_deg } => {
+                let full_h = width / 2;
+                let (row0, rows) = match band_deg {
+                    None => (0, full_h),
+                    Some((top, bottom)) => {
+                        let r0 = Self::elevation_to_row(top, full_h).floor().max(0.0) as usize;
+                        let r1 =
+                            (Self::elevation_to_row(bottom, full_h).ceil() as usize).min(full_h);
+                        (r0, r1.saturating_sub(r0).max(1))
+                    }
+                };
+                Camera {
+                    projection,
+                    width,
+                    height: rows,
+                    row0,
+                }
+            }
+            Projection::Pinhole { .. } => Camera {
+                projection,
+                width,
+                height: ((width as f64 / aspect).round() as usize).max(1),
+                row0: 0,
+            },
+        }
+    }
+
+    /// Full-sphere row coordinate (0 at the top edge, `full_h` at the bottom) of an elevation.
+    pub fn elevation_to_row(elevation_deg: f64, full_h: usize) -> f64 {
+        (90.0 - elevation_deg) / 180.0 * full_h as f64
+    }
+
+    /// Elevation in degrees at the centre of image row `y` (equirectangular camera).
+    pub fn row_elevation_deg(&self, y: usize) -> f64 {
+        let full_h = (self.width / 2) as f64;
+        90.0 - (self.row0 + y) as f64 * 180.0 / full_h - 90.0 / full_h
+    }
+
+    /// Direction through image position (x, y) in pixels (fractional: x + 0.5 is a pixel centre).
+    pub fn direction(&self, x: f32, y: f32) -> Vec3 {
+        match self.projection {
+            Projection::Equirect { .. } => {
+                let full_h = (self.width / 2) as f32;
+                let az = std::f32::consts::TAU * x / self.width as f32;
+                let el = std::f32::consts::FRAC_PI_2
+                    - std::f32::consts::PI * (self.row0 as f32 + y) / full_h;
+                Vec3::new(el.cos() * az.cos(), el.sin(), el.cos() * az.sin())
+            }
+            Projection::Pinhole {
+                hfov_deg,
+                yaw_deg,
+                pitch_deg,
+            } => {
+                let tan_half = (hfov_deg.to_radians() as f32 * 0.5).tan();
+                let sx = (2.0 * x / self.width as f32 - 1.0) * tan_half;
+                let sy = (1.0 - 2.0 * y / self.height as f32) * tan_half * self.height as f32
+                    / self.width as f32;
+                let (yaw, pitch) = (yaw_deg.to_radians() as f32, pitch_deg.to_radians() as f32);
+                let fwd = Vec3::new(
+                    pitch.cos() * yaw.cos(),
+                    pitch.sin(),
+                    pitch.cos() * yaw.sin(),
+                );
+                let right = Vec3::new(-yaw.sin(), 0.0, yaw.cos());
+                let up = right.cross(fwd);
+                (fwd + sx * right + sy * up).normalize()
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn equirect_band_rows_map_exactly_to_elevations() {
+        // 3600 px wide: 1800 rows for 180 degrees, 0.1 degree per row.
+        let c = Camera::new(
+            Projection::Equirect {
+                band_deg: Some((1.0, -6.0)),
+            },
+            3600,
+            2.0,
+        );
+        assert_eq!(c.height, 70);
+        assert!((c.row_elevation_deg(0) - 0.95).abs() < 1e-9);
+        assert!((c.row_elevation_deg(69) + 5.95).abs() < 1e-9);
+        // the top edge of row 0 is exactly +1 degree, the bottom edge of the last row -6
+        assert!((c.direction(0.0, 0.0).y - 1f32.to_radians().sin()).abs() < 1e-6);
+        assert!((c.direction(0.0, 70.0).y + 6f32.to_radians().sin()).abs() < 1e-6);
+    }
+
+    #[test]
+    fn equirect_axes() {
+        let c = Camera::new(Projection::Equirect { band_deg: None }, 360, 2.0);
+        assert_eq!(c.height, 180);
+        assert!((c.direction(0.0, 90.0) - Vec3::X).length() < 1e-6);
+        assert!((c.direction(90.0, 90.0) - Vec3::Z).length() < 1e-6);
+        assert!((c.direction(0.0, 0.0) - Vec3::Y).length() < 1e-6);
+    }
+
+    #[test]
+    fn pinhole_centre_looks_along_yaw_and_pitch() {
+        let c = Camera::new(
+            Projection::Pinhole {
+                hfov_deg: 60.0,
+                yaw_deg: 90.0,
+                pitch_deg: -10.0,
+            },
+            200,
+            2.0,
+        );
+        let d = c.direction(100.0, 50.0);
+        let p = (-10f32).to_radians();
+        assert!(
+            (d - Vec3::new(0.0, p.sin(), p.cos())).length() < 1e-5,
+            "{d}"
+        );
+        // the left edge is 30 degrees off axis
+        assert!((c.direction(0.0, 50.0).dot(d) - 30f32.to_radians().cos()).abs() < 1e-5);
+    }
+}

@@ -1,0 +1,318 @@
+//! The Monte Carlo path tracer of paper section 5: camera rays meet the tessellated ocean, and
+//! every hit splits into a Fresnel reflection and a refraction (weights F and 1 - F), up to a
+//! branching depth past which one of the two is chosen at random with probability F (the
+//! estimator stays unbiased). Paths end after `max_segments` segments (the paper: 10).
+//!
+//! The shading normal is the interpolated vertex normal (`vertex`, the paper's "without
+//! normal mapping") or, for `mapped` (paper section 4), the ocean normal of eq. 7 recomputed
+//! from the layers at the texture coordinate interpolated at the hit and tilted into the
+//! curved-earth frame there. A shading normal can disagree with the triangle it shades; when it
+//! would send the reflected or refracted ray to the wrong side of the geometric surface, the
+//! ray is mirrored back across the triangle's plane, and each case is counted.
+//!
+//! Secondary rays leave the surface offset along the geometric normal by a bound on the hit
+//! point's floating-point error (pbrt-v4, section 6.8.6), not by a fixed epsilon.
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use super::sky::Sky;
+use super::water::{Water, fresnel, reflect, refract};
+use crate::accel::{Accel, Hit, Ray};
+use crate::mesh::Mesh;
+use crate::ocean::Sampler;
+use crate::rng::Rng;
+
+/// Where the shading normal comes from (DESIGN.md, Normal modes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum NormalMode {
+    /// Barycentric interpolation of the vertex normals.
+    Vertex,
+    /// Eq. 7 from the ocean layers at the interpolated texture coordinate.
+    #[default]
+    Mapped,
+}
+
+/// Path-tracing settings.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TraceSettings {
+    pub normals: NormalMode,
+    /// Most segments (rays) in one path.
+    pub max_segments: u32,
+    /// Hits up to this depth branch into both reflection and refraction; deeper ones choose one.
+    pub branch_depth: u32,
+    pub water: Water,
+}
+
+impl Default for TraceSettings {
+    fn default() -> Self {
+        TraceSettings {
+            normals: NormalMode::Mapped,
+            max_segments: 10,
+            branch_depth: 3,
+            water: Water::default(),
+        }
+    }
+}
+
+/// Per-render counts, summed over threads.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Counters {
+    /// Rays handed to the tracer.
+    pub rays: u64,
+    /// Ocean hits shaded.
+    pub hits: u64,
+    /// Samples whose radiance was NaN or infinite (dropped by the guard).
+    pub nan: u64,
+    /// Reflected or refracted rays the shading normal sent to the wrong side of the triangle.
+    pub wrong_side: u64,
+    /// Hits where the shading normal faced away from the incoming ray (geometric normal used).
+    pub backfacing_shading: u64,
+    /// Paths cut at `max_segments` while still bouncing.
+    pub truncated: u64,
+    /// Mapped-normal evaluations, and the nanoseconds spent in the timed 1-in-64 of them.
+    pub normal_evals: u64,
+    pub normal_timed: u64,
+    pub normal_timed_ns: u64,
+}
+
+impl std::ops::AddAssign for Counters {
+    fn add_assign(&mut self, o: Counters) {
+        self.rays += o.rays;
+        self.hits += o.hits;
+        self.nan += o.nan;
+        self.wrong_side += o.wrong_side;
+        self.backfacing_shading += o.backfacing_shading;
+        self.truncated += o.truncated;
+        self.normal_evals += o.normal_evals;
+        self.normal_timed += o.normal_timed;
+        self.normal_timed_ns += o.normal_timed_ns;
+    }
+}
+
+impl Counters {
+    /// Estimated thread-seconds spent computing mapped normals (from the timed sample).
+    pub fn normal_map_thread_seconds(&self) -> f64 {
+        if self.normal_timed == 0 {
+            0.0
+        } else {
+            self.normal_timed_ns as f64 * 1e-9 * self.normal_evals as f64 / self.normal_timed as f64
+        }
+    }
+}
+
+/// Rotates a vector given in the flat-sea frame at camera-relative nominal position (u, v) into
+/// the curved-earth frame there: the local vertical at horizontal distance r is tilted by
+/// r / R away from the camera's nadir (DESIGN.md, Curved earth).
+#[inline]
+pub fn tilt_to_earth(u: f32, v: f32, earth_radius_m: f64, n: Vec3) -> Vec3 {
+    let r = (u * u + v * v).sqrt();
+    if r == 0.0 || !earth_radius_m.is_finite() {
+        return n;
+    }
+    let theta = (r as f64 / earth_radius_m) as f32;
+    let (s, c) = theta.sin_cos();
+    // Rotation about the horizontal axis a = (v, 0, -u) / r (Rodrigues' formula).
+    let a = Vec3::new(v / r, 0.0, -u / r);
+    n * c + a.cross(n) * s + a * a.dot(n) * (1.0 - c)
+}
+
+/// What the integrator traces against.
+pub struct SceneRef<'a> {
+    pub accel: &'a dyn Accel,
+    /// The ocean, for mapped normals (required for `NormalMode::Mapped`).
+    pub ocean: Option<Sampler<'a>>,
+    pub earth_radius_m: f64,
+    pub sky: &'a Sky,
+}
+
+/// pbrt's gamma(n) = n eps / (1 - n eps) for f32 rounding.
+const fn gamma(n: f32) -> f32 {
+    let e = f32::EPSILON * 0.5;
+    n * e / (1.0 - n * e)
+}
+
+/// The surface at a hit, as shading needs it.
+struct SurfacePoint {
+    p: Vec3,
+    /// Geometric normal, oriented to the air side (agreeing with the vertex normals).
+    ng: Vec3,
+    /// Offset distance that clears the hit's rounding error.
+    offset: f32,
+}
+
+fn surface_point(mesh: &Mesh, hit: &Hit) -> SurfacePoint {
+    let tri = mesh.indices()[hit.prim as usize];
+    let [p0, p1, p2] = mesh.triangle(hit.prim).map(Vec3::from);
+    let (b1, b2) = (hit.u, hit.v);
+    let b0 = 1.0 - b1 - b2;
+    let p = b0 * p0 + b1 * p1 + b2 * p2;
+    let err = gamma(7.0) * (b0.abs() * p0.abs() + b1.abs() * p1.abs() + b2.abs() * p2.abs());
+    let mut ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+    let nv = if mesh.normals().is_empty() {
+        Vec3::Y
+    } else {
+        Vec3::from(Mesh::interpolate(mesh.normals(), tri, b1, b2))
+    };
+    if ng.dot(nv) < 0.0 {
+        ng = -ng;
+    }
+    if ng == Vec3::ZERO {
+        ng = nv.normalize_or(Vec3::Y);
+    }
+    let offset = ng.abs().dot(err) + 1e-7 * p.abs().max_element();
+    SurfacePoint { p, ng, offset }
+}
+
+impl SceneRef<'_> {
+    /// The shading normal `mode` gives at a hit (air side up), for tests and cross-checks.
+    pub fn normal_at(&self, hit: &Hit, mode: NormalMode) -> Vec3 {
+        let settings = TraceSettings {
+            normals: mode,
+            ..TraceSettings::default()
+        };
+        self.shading_normal(hit, &settings, &mut Counters::default())
+    }
+
+    fn shading_normal(&self, hit: &Hit, settings: &TraceSettings, c: &mut Counters) -> Vec3 {
+        let mesh = self.accel.mesh();
+        match (settings.normals, &self.ocean) {
+            (NormalMode::Mapped, Some(ocean)) => {
+                let timed = c.normal_evals.is_multiple_of(64);
+                let t0 = timed.then(std::time::Instant::now);
+                let uv = self.accel.interpolate_uv(hit);
+                let n = Vec3::from(ocean.sample(uv[0], uv[1]).normal);
+                let n = tilt_to_earth(uv[0], uv[1], self.earth_radius_m, n);
+                c.normal_evals += 1;
+                if let Some(t0) = t0 {
+                    c.normal_timed += 1;
+                    c.normal_timed_ns += t0.elapsed().as_nanos() as u64;
+                }
+                n
+            }
+            _ => {
+                if mesh.normals().is_empty() {
+                    return Vec3::Y;
+                }
+                let tri = mesh.indices()[hit.prim as usize];
+                Vec3::from(Mesh::interpolate(mesh.normals(), tri, hit.u, hit.v))
+                    .normalize_or(Vec3::Y)
+            }
+        }
+    }
+
+    /// Radiance arriving at `ray.org` along `-ray.dir`. `in_water`: the ray travels in the sea.
+    pub fn radiance(
+        &self,
+        ray: &Ray,
+        in_water: bool,
+        segment: u32,
+        settings: &TraceSettings,
+        rng: &mut Rng,
+        c: &mut Counters,
+    ) -> Vec3 {
+        if segment >= settings.max_segments {
+            c.truncated += 1;
+            return Vec3::ZERO;
+        }
+        c.rays += 1;
+        let d = Vec3::from(ray.dir);
+        let Some(hit) = self.accel.intersect(ray) else {
+            return if in_water {
+                Vec3::from(settings.water.upwelling)
+            } else {
+                self.sky.radiance(Vec3::from(ray.org), d)
+            };
+        };
+        c.hits += 1;
+        let sp = surface_point(self.accel.mesh(), &hit);
+        let from_below = d.dot(sp.ng) > 0.0;
+        let attenuation = if from_below {
+            settings.water.transmittance(hit.t)
+        } else {
+            Vec3::ONE
+        };
+
+        // Shading normal facing the incoming ray, and the geometric one likewise.
+        let mut ns = self.shading_normal(&hit, settings, c);
+        let (ng, eta_i, eta_t) = if from_below {
+            (-sp.ng, settings.water.ior, 1.0)
+        } else {
+            (sp.ng, 1.0, settings.water.ior)
+        };
+        if from_below {
+            ns = -ns;
+        }
+        if d.dot(ns) >= 0.0 {
+            c.backfacing_shading += 1;
+            ns = ng;
+        }
+        let cos_i = -d.dot(ns);
+        let f = fresnel(cos_i, eta_i, eta_t);
+
+        // Keep each new direction on its proper side of the triangle (see module doc).
+        let mut keep_side = |w: Vec3, want_same_side_as_ng: bool| {
+            let s = w.dot(ng);
+            if (s > 0.0) != want_same_side_as_ng {
+                c.wrong_side += 1;
+                let m = w - 2.0 * s * ng;
+                if m.dot(ng) == 0.0 {
+                    if want_same_side_as_ng { ng } else { -ng }
+                } else {
+                    m
+                }
+            } else {
+                w
+            }
+        };
+        let r_dir = keep_side(reflect(d, ns), true);
+        let t_dir = refract(d, ns, eta_i / eta_t).map(|t| keep_side(t, false));
+        let spawn = |w: Vec3| {
+            let o = sp.p
+                + if w.dot(ng) > 0.0 {
+                    sp.offset
+                } else {
+                    -sp.offset
+                } * ng;
+            Ray::new(o.to_array(), w.to_array())
+        };
+        // After this hit, the reflected ray stays in the medium it came from; the refracted one
+        // changes medium.
+        let (r_water, t_water) = (from_below, !from_below);
+
+        let l = match t_dir {
+            None => self.radiance(&spawn(r_dir), r_water, segment + 1, settings, rng, c),
+            Some(t_dir) if segment < settings.branch_depth => {
+                let lr = self.radiance(&spawn(r_dir), r_water, segment + 1, settings, rng, c);
+                let lt = self.radiance(&spawn(t_dir), t_water, segment + 1, settings, rng, c);
+                f * lr + (1.0 - f) * lt
+            }
+            Some(t_dir) => {
+                if rng.f32() < f {
+                    self.radiance(&spawn(r_dir), r_water, segment + 1, settings, rng, c)
+                } else {
+                    self.radiance(&spawn(t_dir), t_water, segment + 1, settings, rng, c)
+                }
+            }
+        };
+        attenuation * l
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn earth_tilt_turns_up_towards_the_local_vertical() {
+        let r = 6_371_000.0;
+        let n = tilt_to_earth(5000.0, 0.0, r, Vec3::Y);
+        // 5 km along +x the local vertical leans 5000/R radians towards +x
+        assert!((n.x - (5000.0 / r) as f32).abs() < 1e-7 && (n.length() - 1.0).abs() < 1e-6);
+        assert_eq!(tilt_to_earth(0.0, 0.0, r, Vec3::Y), Vec3::Y);
+        let n = tilt_to_earth(0.0, -3000.0, r, Vec3::Y);
+        assert!(n.z < 0.0 && n.x.abs() < 1e-9);
+    }
+}

@@ -1,0 +1,107 @@
+//! Sea water as a smooth dielectric interface over an absorbing body (paper section 5: "each
+//! intersection generated a Fresnel reflection and refraction"). Fresnel reflectance is the
+//! exact unpolarised one for a dielectric (Born & Wolf); absorption follows Beer-Lambert per RGB
+//! channel; light that travels down and never returns to the surface is replaced by a
+//! configurable upwelling radiance, so the sea has a body colour rather than black.
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+/// Optical properties of the water.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Water {
+    /// Refractive index relative to air.
+    pub ior: f32,
+    /// Absorption coefficients, 1/m, per linear RGB channel.
+    pub absorption: [f32; 3],
+    /// Radiance leaving the water body upward just below the surface (what a downward ray
+    /// that never meets the surface again returns), per channel.
+    pub upwelling: [f32; 3],
+}
+
+impl Default for Water {
+    fn default() -> Self {
+        // Pure-water absorption at ~600/550/450 nm (Pope & Fry 1997), and a deep-ocean body
+        // colour small against the sky, as measured water-leaving radiance is.
+        Water {
+            ior: 1.333,
+            absorption: [0.25, 0.07, 0.02],
+            upwelling: [0.004, 0.012, 0.02],
+        }
+    }
+}
+
+/// Unpolarised Fresnel reflectance for light arriving at cosine `cos_i` (> 0) from a medium
+/// of index `eta_i` onto one of index `eta_t`. Returns 1 for total internal reflection.
+pub fn fresnel(cos_i: f32, eta_i: f32, eta_t: f32) -> f32 {
+    let cos_i = cos_i.clamp(0.0, 1.0);
+    let eta = eta_i / eta_t;
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+    if sin2_t >= 1.0 {
+        return 1.0;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    let rs = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
+    let rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
+    0.5 * (rs * rs + rp * rp)
+}
+
+/// Mirror reflection of direction `d` about normal `n`.
+#[inline]
+pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {
+    d - 2.0 * d.dot(n) * n
+}
+
+/// Refraction of `d` through a surface with normal `n` facing the incoming side (d·n < 0),
+/// relative index `eta = eta_i / eta_t`; `None` on total internal reflection.
+#[inline]
+pub fn refract(d: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
+    let cos_i = -d.dot(n);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    if sin2_t >= 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    Some((eta * d + (eta * cos_i - cos_t) * n).normalize())
+}
+
+impl Water {
+    /// Beer-Lambert transmittance over `distance` metres of water.
+    pub fn transmittance(&self, distance: f32) -> Vec3 {
+        Vec3::from(self.absorption.map(|a| (-a * distance.max(0.0)).exp()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fresnel_known_values() {
+        // normal incidence: ((n-1)/(n+1))^2 = 0.02037 for n = 1.333
+        assert!((fresnel(1.0, 1.0, 1.333) - 0.020_37).abs() < 1e-4);
+        // grazing incidence reflects everything
+        assert!(fresnel(0.0, 1.0, 1.333) > 0.999);
+        // Brewster angle (53.1 deg): p-polarised reflectance vanishes; rs = -0.280, F = rs^2 / 2
+        let brewster = 1.333f32.atan();
+        let f = fresnel(brewster.cos(), 1.0, 1.333);
+        assert!((f - 0.0392).abs() < 1e-4, "{f}");
+        // total internal reflection from below past the critical angle (48.6 degrees)
+        assert_eq!(fresnel(50f32.to_radians().cos(), 1.333, 1.0), 1.0);
+        // below it, reflectance rises towards 1 as the critical angle nears (0.0556 at 40 deg)
+        assert!((fresnel(40f32.to_radians().cos(), 1.333, 1.0) - 0.0556).abs() < 2e-4);
+    }
+
+    #[test]
+    fn refraction_obeys_snell() {
+        let n = Vec3::Y;
+        let theta = 50f32.to_radians();
+        let d = Vec3::new(theta.sin(), -theta.cos(), 0.0);
+        let t = refract(d, n, 1.0 / 1.333).unwrap();
+        assert!((t.x - theta.sin() / 1.333).abs() < 1e-6 && t.y < 0.0);
+        // from below at 60 degrees: total internal reflection
+        let up = Vec3::new(60f32.to_radians().sin(), 60f32.to_radians().cos(), 0.0);
+        assert!(refract(up, -Vec3::Y, 1.333).is_none());
+    }
+}
