@@ -6,6 +6,7 @@
 pub mod accel;
 pub mod analysis;
 pub mod image_io;
+pub mod lod;
 pub mod mesh;
 pub mod ocean;
 pub mod render;

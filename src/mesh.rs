@@ -6,6 +6,8 @@
 //! one triangle), and is immutable afterwards. Its position and texture-coordinate allocations
 //! are padded past the last element, because Embree reads vertex buffers with 16-byte loads and
 //! shares them with the caller instead of copying them.
+//!
+//! [`write_ply`] exports a mesh as binary PLY for Blender and MeshLab.
 
 use thiserror::Error;
 
@@ -190,6 +192,75 @@ impl Mesh {
             attr[tri[2] as usize],
         );
         std::array::from_fn(|i| w * a[i] + u * b[i] + v * c[i])
+    }
+}
+
+/// Writes `mesh` as binary little-endian PLY (Blender and MeshLab read it): per vertex
+/// `x y z`, then `nx ny nz` and the texture coordinate as `s t` when the mesh has them, and
+/// faces as a `uchar` count plus `uint` indices. The file is written to a temporary name in the
+/// same directory and renamed, so a failed write never leaves a partial file behind.
+pub fn write_ply(mesh: &Mesh, path: &std::path::Path) -> std::io::Result<()> {
+    use std::io::Write;
+    let name = path.file_name().ok_or_else(|| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("{} is not a file path", path.display()),
+        )
+    })?;
+    let mut tmp_name = std::ffi::OsString::from(".");
+    tmp_name.push(name);
+    tmp_name.push(format!(".{}.tmp", std::process::id()));
+    let tmp = path.with_file_name(tmp_name);
+    let write = || -> std::io::Result<()> {
+        let mut w = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(&tmp)?);
+        let (normals, uvs) = (!mesh.normals.is_empty(), !mesh.uvs.is_empty());
+        write!(
+            w,
+            "ply\nformat binary_little_endian 1.0\ncomment vastocean mesh: camera-relative \
+             positions, y up; s t = nominal horizontal position (x, z), m\nelement vertex {}\n\
+             property float x\nproperty float y\nproperty float z\n",
+            mesh.vertex_count()
+        )?;
+        if normals {
+            w.write_all(b"property float nx\nproperty float ny\nproperty float nz\n")?;
+        }
+        if uvs {
+            w.write_all(b"property float s\nproperty float t\n")?;
+        }
+        write!(
+            w,
+            "element face {}\nproperty list uchar uint vertex_indices\nend_header\n",
+            mesh.triangle_count()
+        )?;
+        for (i, p) in mesh.positions.iter().enumerate() {
+            for c in p {
+                w.write_all(&c.to_le_bytes())?;
+            }
+            if normals {
+                for c in &mesh.normals[i] {
+                    w.write_all(&c.to_le_bytes())?;
+                }
+            }
+            if uvs {
+                for c in &mesh.uvs[i] {
+                    w.write_all(&c.to_le_bytes())?;
+                }
+            }
+        }
+        for t in &mesh.indices {
+            w.write_all(&[3])?;
+            for i in t {
+                w.write_all(&i.to_le_bytes())?;
+            }
+        }
+        w.into_inner().map_err(|e| e.into_error())?.sync_all()
+    };
+    match write().and_then(|()| std::fs::rename(&tmp, path)) {
+        Ok(()) => Ok(()),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
     }
 }
 

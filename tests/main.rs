@@ -3,5 +3,6 @@
 mod common;
 #[cfg(feature = "embree")]
 mod embree;
+mod lod;
 #[cfg(feature = "embree")]
 mod render;

@@ -1,0 +1,81 @@
+//! The curved earth under the tessellation (DESIGN.md, "Curved earth"): the horizon distance of
+//! a camera, and the map from a nominal horizontal position x (camera-relative, arc length from
+//! the camera's nadir) and the flat-frame surface sample of eqs. 4 and 7 to a point and normal in
+//! the camera's frame (y up at the nadir, origin at mean sea level below the camera).
+
+use crate::ocean::Sample;
+
+/// Distance along the sea (arc length) from the camera's nadir to the geometric horizon of a
+/// camera `camera_height_m` above a sphere of radius `earth_radius_m`: R acos(R / (R + h)),
+/// about sqrt(2 R h) (within h / 3R relative).
+pub fn horizon_distance(camera_height_m: f64, earth_radius_m: f64) -> f64 {
+    let (r, h) = (earth_radius_m, camera_height_m.max(0.0));
+    // atan of tangent length over R avoids acos's cancellation near 1.
+    r * ((2.0 * r * h + h * h).sqrt()).atan2(r)
+}
+
+/// Surface point X and unit normal of `sample` (taken at nominal camera-relative position
+/// (x, z)) in the camera frame: the nominal point moves onto the sphere at angle r / R about the
+/// nadir, and the flat-frame displacement (Dx, h, Dz) and normal are rotated by that tilt, so
+/// a sea at rest drops by 2 R sin^2(r / 2R) ~ r^2 / 2R.
+#[inline]
+pub fn curved_frame_point(
+    x: f64,
+    z: f64,
+    sample: &Sample,
+    earth_radius_m: f64,
+) -> ([f64; 3], [f64; 3]) {
+    let r = x.hypot(z);
+    let (ux, uz) = if r > 0.0 { (x / r, z / r) } else { (1.0, 0.0) };
+    let theta = r / earth_radius_m;
+    let (st, ct) = theta.sin_cos();
+    let half = (0.5 * theta).sin();
+    let drop = 2.0 * earth_radius_m * half * half;
+    let base = [earth_radius_m * st * ux, -drop, earth_radius_m * st * uz];
+    // Local frame at the base point: radial tangent, azimuthal tangent, up.
+    let tr = [ct * ux, -st, ct * uz];
+    let ta = [-uz, 0.0, ux];
+    let up = [st * ux, ct, st * uz];
+    let tilt = |v: [f64; 3]| -> [f64; 3] {
+        let radial = v[0] * ux + v[2] * uz;
+        let azim = -v[0] * uz + v[2] * ux;
+        std::array::from_fn(|i| radial * tr[i] + azim * ta[i] + v[1] * up[i])
+    };
+    let d = tilt([
+        sample.disp[0] as f64,
+        sample.height as f64,
+        sample.disp[1] as f64,
+    ]);
+    let n = tilt(sample.normal.map(|c| c as f64));
+    (std::array::from_fn(|i| base[i] + d[i]), n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn horizon_is_close_to_sqrt_2rh() {
+        for h in [2.0, 100.0] {
+            let d = horizon_distance(h, 6.371e6);
+            assert!(
+                (d / (2.0 * 6.371e6 * h).sqrt() - 1.0).abs() < 1e-4,
+                "{h}: {d}"
+            );
+        }
+    }
+
+    #[test]
+    fn flat_sea_lies_on_the_sphere() {
+        let r_e = 1000.0;
+        let (p, n) = curved_frame_point(300.0, -400.0, &Sample::FLAT, r_e);
+        let c = [0.0, -r_e, 0.0];
+        let dist = ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2)).sqrt();
+        assert!((dist - r_e).abs() < 1e-9);
+        // Normal points away from the centre; arc length from the nadir is 500 m.
+        for i in 0..3 {
+            assert!((n[i] - (p[i] - c[i]) / r_e).abs() < 1e-12);
+        }
+        assert!((r_e * (1.0 + p[1] / r_e).acos() - 500.0).abs() < 1e-6);
+    }
+}
