@@ -235,7 +235,8 @@ void vo_intersect_batch(void *scene, const vo_ray *rays, vo_hit *hits, size_t n)
   for (size_t base = 0; base < n; base += 16) {
     size_t m = n - base < 16 ? n - base : 16;
     struct RTCRayHit16 p; /* RTC_ALIGN(64) in the header keeps this aligned on the stack */
-    int valid[16];
+    /* Embree reads the mask with 64-byte aligned vector loads. */
+    RTC_ALIGN(64) int valid[16];
     for (size_t i = 0; i < 16; ++i) {
       const vo_ray *r = &rays[base + (i < m ? i : 0)];
       valid[i] = i < m ? -1 : 0;

@@ -127,6 +127,10 @@ unsafe extern "C" fn on_error(user: *mut c_void, code: c_int, message: *const c_
 }
 
 /// An Embree device with a thread budget.
+///
+/// Setup errors are collected per device and drained by the setup call that checks them, so
+/// build scenes on one device from one thread at a time (tracing is unrestricted); otherwise
+/// one build could report, and consume, another's error.
 pub struct Device {
     raw: NonNull<c_void>,
     errors: Box<ErrorSink>,
@@ -396,7 +400,9 @@ impl Accel for Scene {
     }
 
     fn interpolate_uv(&self, hit: &Hit) -> [f32; 2] {
-        if self.mesh.uvs().is_empty() {
+        // rtcInterpolate does no bounds check in release builds: a foreign `Hit` must not make
+        // it read outside the buffers.
+        if self.mesh.uvs().is_empty() || hit.prim as usize >= self.mesh.triangle_count() {
             return [0.0; 2];
         }
         let mut out = [0f32; 2];
@@ -439,6 +445,8 @@ pub struct EmbreeInfo {
 }
 
 /// Probes Embree with `verbose=1` and reads its own report. `threads` as in [`Device::new`].
+/// Embree prints that report to stdout only, so the shim redirects file descriptor 1 for the
+/// duration of the probe: call this before the program prints anything of its own.
 pub fn describe(threads: usize) -> Result<EmbreeInfo, EmbreeError> {
     let device = Device::new(threads)?;
     let version = device.version();

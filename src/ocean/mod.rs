@@ -250,8 +250,14 @@ impl OceanParams {
             if i > 0 {
                 let kb = band_edge(&self.layers[i - 1]);
                 let lo = MIN_BAND_START_FUNDAMENTALS * std::f64::consts::TAU / kb;
-                // The band [kb, kmax) must span at least a factor 2 in wavenumber.
-                let hi = std::f64::consts::PI * l.n as f64 / (2.0 * kb);
+                // The band [kb, kmax) must span at least a factor 2 in wavenumber; kmax is the
+                // layer's Nyquist wavenumber for the last layer, BAND_SPLIT of it otherwise.
+                let split = if i + 1 == self.layers.len() {
+                    1.0
+                } else {
+                    BAND_SPLIT
+                };
+                let hi = split * std::f64::consts::PI * l.n as f64 / (2.0 * kb);
                 if l.size_m < lo || l.size_m > hi {
                     return Err(OceanError::invalid(
                         format!("ocean.layers[{i}].size_m"),

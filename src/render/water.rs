@@ -15,8 +15,10 @@ pub struct Water {
     pub ior: f32,
     /// Absorption coefficients, 1/m, per linear RGB channel.
     pub absorption: [f32; 3],
-    /// Radiance leaving the water body upward just below the surface (what a downward ray
-    /// that never meets the surface again returns), per channel.
+    /// Water-leaving radiance of the water body, per channel: what a downward ray that never
+    /// meets the surface again returns. It is taken as seen from the air side, so the n^2
+    /// radiance scaling at the interface is already in it (paths that cross air -> water -> air
+    /// are unaffected: their two scalings cancel).
     pub upwelling: [f32; 3],
 }
 
