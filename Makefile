@@ -24,11 +24,10 @@ setup:
 build: setup
 	$(CARGO) build --release
 
-# Until the renderer lands, the default "scene" is the Embree smoke run: build a BVH over a
-# tessellated grid and trace a batch of rays through it, printing hit statistics.
+# The default scene: camera 2 m above the sea, full 360 degrees, paper-low tessellation with
+# normal mapping, a low sun. Prints where the PNG is.
 run: build
-	./target/release/vastocean info
-	./target/release/vastocean smoke
+	./target/release/vastocean render --out $(OUT)/default
 
 test: setup
 	$(CARGO) test --all-targets -- --quiet

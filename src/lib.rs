@@ -5,6 +5,7 @@
 
 pub mod accel;
 pub mod analysis;
+pub mod config;
 pub mod image_io;
 pub mod lod;
 pub mod mesh;

@@ -32,6 +32,11 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Render a scene: ocean -> LOD tessellation -> Embree BVH -> path tracing -> EXR + PNG + JSON.
+    #[cfg(feature = "embree")]
+    Render(RenderArgs),
+    /// Tessellate the ocean with the LOD doubling method and report (or export) the mesh.
+    Mesh(MeshArgs),
     /// Generate the ocean layers (TMA spectrum, FFT) and report their statistics.
     Ocean(OceanArgs),
     /// Embree smoke run: build a BVH over a wavy grid and trace random rays down onto it.
@@ -178,6 +183,263 @@ fn ocean(a: OceanArgs) -> Result<()> {
     Ok(())
 }
 
+#[cfg(feature = "embree")]
+#[derive(clap::Args)]
+#[command(allow_negative_numbers = true)]
+struct RenderArgs {
+    /// Scene file (TOML); command-line flags override it. Without one, the default scene.
+    #[arg(long)]
+    config: Option<std::path::PathBuf>,
+    /// Equirectangular EXR sky map (instead of the built-in analytic sky).
+    #[arg(long)]
+    sky: Option<std::path::PathBuf>,
+    /// Image width in pixels (the full 360 degree width for the equirectangular camera).
+    #[arg(long)]
+    width: Option<usize>,
+    /// Samples per pixel.
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Tessellation: the paper's presets, or chosen from the pixel footprint.
+    #[arg(long, value_enum)]
+    lod: Option<vastocean::config::LodChoice>,
+    /// Shading normals: interpolated vertex normals, or recomputed from the ocean (normal mapping).
+    #[arg(long, value_enum)]
+    normals: Option<vastocean::render::NormalMode>,
+    /// Render only the elevations TOP:BOTTOM in degrees, e.g. +1:-6 (equirectangular camera).
+    #[arg(long, value_parser = parse_band, allow_hyphen_values = true)]
+    band: Option<(f64, f64)>,
+    /// Camera height above the sea, m.
+    #[arg(long)]
+    camera_height: Option<f64>,
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Worker threads (0 = all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Output prefix: writes PREFIX.exr, PREFIX.png and PREFIX.json.
+    #[arg(long, default_value = "out/render")]
+    out: std::path::PathBuf,
+    /// Print the JSON sidecar on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[cfg(feature = "embree")]
+fn parse_band(s: &str) -> Result<(f64, f64), String> {
+    let (a, b) = s
+        .split_once(':')
+        .ok_or_else(|| format!("band {s:?} is not TOP:BOTTOM (degrees, e.g. +1:-6)"))?;
+    let num = |x: &str| {
+        x.trim()
+            .trim_start_matches('+')
+            .parse::<f64>()
+            .map_err(|e| format!("band {s:?}: {e}"))
+    };
+    Ok((num(a)?, num(b)?))
+}
+
+#[cfg(feature = "embree")]
+fn render(a: RenderArgs) -> Result<()> {
+    use vastocean::config::SceneConfig;
+    use vastocean::render::Projection;
+    use vastocean::render::pipeline::{RenderError, render_scene, write_outputs};
+
+    let mut cfg = match &a.config {
+        Some(path) => SceneConfig::load(path).map_err(|e| BadInput(e.to_string()))?,
+        None => SceneConfig::default(),
+    };
+    if a.sky.is_some() {
+        cfg.sky.file = a.sky.clone();
+    }
+    if let Some(w) = a.width {
+        cfg.camera.width = w;
+    }
+    if let Some(s) = a.spp {
+        cfg.render.spp = s;
+    }
+    if let Some(l) = a.lod {
+        cfg.lod.preset = l;
+    }
+    if let Some(n) = a.normals {
+        cfg.render.normals = n;
+    }
+    if let Some(b) = a.band {
+        cfg.camera.projection = match cfg.camera.projection {
+            Projection::Equirect { .. } => Projection::Equirect { band_deg: Some(b) },
+            Projection::Pinhole { .. } => {
+                return Err(
+                    BadInput("--band applies to the equirectangular camera only".into()).into(),
+                );
+            }
+        };
+    }
+    if let Some(h) = a.camera_height {
+        cfg.camera.height_m = h;
+    }
+    if let Some(s) = a.seed {
+        cfg.render.seed = s;
+    }
+    if let Some(t) = a.threads {
+        cfg.render.threads = t;
+    }
+    cfg.validate().map_err(|e| BadInput(e.to_string()))?;
+    let mut r = render_scene(&cfg, true).map_err(|e| match e {
+        // A sky file that is missing or not a sky map is bad input, not a crash.
+        RenderError::Image(e) => anyhow::Error::new(BadInput(e.to_string())),
+        e => e.into(),
+    })?;
+    write_outputs(&mut r, &a.out)?;
+    let rep = &r.report;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(rep)?);
+    } else {
+        println!(
+            "rendered {} x {} at {} spp: {} triangles (Embree {}), {:.1} M rays at {:.2} Mrays/s",
+            rep.width,
+            rep.height,
+            rep.spp,
+            rep.triangles,
+            rep.embree_version,
+            rep.rays as f64 / 1e6,
+            rep.mrays_per_s
+        );
+        println!(
+            "  seconds: ocean {:.2}, tessellation {:.2}, BVH {:.2}, trace {:.2} (normal mapping ~{:.2}, {:.1}%), total {:.2}",
+            rep.seconds_ocean,
+            rep.seconds_tessellation,
+            rep.seconds_build,
+            rep.seconds_trace,
+            rep.seconds_normal_map,
+            100.0 * rep.normal_map_share,
+            rep.seconds_total
+        );
+        println!(
+            "  NaN samples {}, wrong-side directions {}, truncated paths {}",
+            rep.nan_count, rep.wrong_side_count, rep.truncated_paths
+        );
+        println!(
+            "  wrote {} {} {}",
+            rep.exr.display(),
+            rep.png.display(),
+            rep.json.display()
+        );
+    }
+    Ok(())
+}
+
+#[derive(clap::Args)]
+#[command(allow_negative_numbers = true)]
+struct MeshArgs {
+    /// Start from one of the paper's tessellations (flags below override it).
+    #[arg(long, value_enum, default_value_t = vastocean::lod::Preset::PaperLow)]
+    lod: vastocean::lod::Preset,
+    /// Triangle size next to the camera, m.
+    #[arg(long)]
+    near_size: Option<f64>,
+    /// Double distance, m.
+    #[arg(long)]
+    double_distance: Option<f64>,
+    /// Most doublings (generations).
+    #[arg(long)]
+    generations: Option<u32>,
+    /// Where the tessellation ends, m (default: just past the horizon).
+    #[arg(long)]
+    max_distance: Option<f64>,
+    /// Camera height above the sea, m.
+    #[arg(long, default_value_t = 2.0)]
+    camera_height: f64,
+    /// `square` (all directions) or `frustum:YAW_DEG:HFOV_DEG` (a perspective camera's view).
+    #[arg(long, default_value = "square")]
+    pattern: vastocean::lod::Pattern,
+    /// How the paper's doubling rule is read (see the README).
+    #[arg(long, value_enum)]
+    reading: Option<vastocean::lod::Reading>,
+    /// Seed of the ocean sampled at every vertex (the default case-22 ocean).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Count the triangles without building the mesh.
+    #[arg(long)]
+    count_only: bool,
+    /// Write the mesh as binary PLY (positions, normals, texture coordinates).
+    #[arg(long)]
+    ply: Option<std::path::PathBuf>,
+    /// Print one JSON object on stdout instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+fn mesh(a: MeshArgs) -> Result<()> {
+    let mut p = a.lod.params(a.camera_height);
+    if let Some(v) = a.near_size {
+        p.near_size_m = v;
+    }
+    if let Some(v) = a.double_distance {
+        p.double_distance_m = v;
+    }
+    if a.generations.is_some() {
+        p.generations = a.generations;
+    }
+    if a.max_distance.is_some() {
+        p.max_distance_m = a.max_distance;
+    }
+    if let Some(r) = a.reading {
+        p.reading = r;
+    }
+    p.pattern = a.pattern;
+    p.validate().map_err(|e| BadInput(e.to_string()))?;
+    if a.count_only {
+        let (triangles, vertices) =
+            vastocean::lod::try_count(&p).map_err(|e| BadInput(e.to_string()))?;
+        let out = serde_json::json!({ "triangles": triangles, "vertices": vertices, "max_distance_m": p.max_distance(), "params": p });
+        if a.json {
+            println!("{}", serde_json::to_string_pretty(&out)?);
+        } else {
+            println!(
+                "{triangles} triangles, {vertices} vertices out to {:.0} m",
+                p.max_distance()
+            );
+        }
+        return Ok(());
+    }
+    let ocean = Surface::new(&OceanParams::default(), a.seed)?;
+    let (mesh, stats) = vastocean::lod::tessellate(&p, &ocean.sampler([0.0, 0.0]))?;
+    if let Some(path) = &a.ply {
+        vastocean::mesh::write_ply(&mesh, path)?;
+    }
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(
+                &serde_json::json!({ "stats": &stats, "triangles": stats.triangles, "vertices": stats.vertices, "rings": stats.rings, "max_distance_m": stats.max_distance_m, "seconds": stats.seconds, "bytes": stats.bytes, "params": p })
+            )?
+        );
+        return Ok(());
+    }
+    println!(
+        "LOD {:?}, reading {:?}, pattern {}: {} triangles, {} vertices, {} rings out to {:.0} m, {:.1} MB, {:.2} s",
+        a.lod,
+        p.reading,
+        p.pattern,
+        stats.triangles,
+        stats.vertices,
+        stats.rings,
+        stats.max_distance_m,
+        stats.bytes as f64 / 1e6,
+        stats.seconds
+    );
+    println!("  ring   triangle size (m)   from (m)     to (m)   triangles");
+    for (i, r) in stats.per_ring.iter().enumerate() {
+        println!(
+            "  {i:>4} {:>19.3} {:>10.1} {:>10.1} {:>11}",
+            r.size_m, r.inner_m, r.outer_m, r.triangles
+        );
+    }
+    if let Some(path) = &a.ply {
+        println!("  wrote {}", path.display());
+    }
+    Ok(())
+}
+
 /// Errors in what the user gave us (exit code 2), as opposed to failures while running.
 #[derive(Debug, thiserror::Error)]
 #[error("{0}")]
@@ -235,6 +497,9 @@ fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Info { threads, json } => info(threads, json),
         Command::Ocean(a) => ocean(a),
+        Command::Mesh(a) => mesh(a),
+        #[cfg(feature = "embree")]
+        Command::Render(a) => render(a),
         #[cfg(feature = "embree")]
         Command::Smoke {
             cells,

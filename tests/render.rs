@@ -63,6 +63,27 @@ fn equirect(width: usize, band: Option<(f64, f64)>) -> Camera {
 }
 
 #[test]
+fn mapped_normal_tilt_agrees_with_the_tessellators_curved_earth_frame() {
+    // The integrator tilts mapped normals in f32 at every hit; the tessellator places vertices
+    // and their normals in f64. At a vertex both must give the same normal.
+    let ocean = small_ocean(1.0);
+    let sampler = ocean.sampler([0.0, 0.0]);
+    let mut rng = vastocean::rng::Rng::keyed(&[17]);
+    for _ in 0..1000 {
+        let (u, v) = (rng.range(-6000.0, 6000.0), rng.range(-6000.0, 6000.0));
+        let s = sampler.sample(u, v);
+        let (_, n) = vastocean::lod::curved_frame_point(u as f64, v as f64, &s, 6_371_000.0);
+        let tilted =
+            vastocean::render::integrator::tilt_to_earth(u, v, 6_371_000.0, Vec3::from(s.normal));
+        let want = Vec3::new(n[0] as f32, n[1] as f32, n[2] as f32);
+        assert!(
+            (tilted - want).length() < 1e-6,
+            "at ({u}, {v}): {tilted} vs {want}"
+        );
+    }
+}
+
+#[test]
 fn white_furnace_every_pixel_equals_the_sky() {
     let ocean = small_ocean(1.0);
     let sampler = ocean.sampler([0.0, 0.0]);
@@ -70,6 +91,7 @@ fn white_furnace_every_pixel_equals_the_sky() {
     let l = [0.5f32, 0.7, 1.0];
     let sky = Sky::analytic(AnalyticSky::Uniform { radiance: l });
     let scene = SceneRef {
+        skip_slope: None,
         accel: &accel,
         ocean: Some(sampler),
         earth_radius_m: 6_371_000.0,
@@ -116,6 +138,7 @@ fn flat_sea_matches_the_fresnel_weighted_mirror_lookup() {
     let sky = Sky::analytic(AnalyticSky::Gradient { zenith, horizon });
     // A flat mesh: no earth curvature, so the mapped normal is +y like the geometry.
     let scene = SceneRef {
+        skip_slope: None,
         accel: &accel,
         ocean: Some(sampler),
         earth_radius_m: f64::INFINITY,
@@ -162,6 +185,7 @@ fn mapped_normal_is_the_ocean_normal_at_the_hit() {
     let accel = embree(ocean_grid(&sampler, 20.0, 0.8));
     let sky = Sky::analytic(AnalyticSky::default());
     let scene = SceneRef {
+        skip_slope: None,
         accel: &accel,
         ocean: Some(sampler),
         earth_radius_m: f64::INFINITY,
@@ -230,6 +254,7 @@ fn vertex_and_mapped_differ_on_a_coarse_mesh_and_agree_on_a_fine_one() {
     let diff = |cell: f32| {
         let accel = embree(ocean_grid(&sampler, 12.0, cell));
         let scene = SceneRef {
+            skip_slope: None,
             accel: &accel,
             ocean: Some(sampler),
             earth_radius_m: f64::INFINITY,
@@ -269,6 +294,7 @@ fn render_is_bit_identical_for_one_and_two_threads() {
     let accel = embree(ocean_grid(&sampler, 40.0, 0.5));
     let sky = Sky::analytic(AnalyticSky::default());
     let scene = SceneRef {
+        skip_slope: None,
         accel: &accel,
         ocean: Some(sampler),
         earth_radius_m: 6_371_000.0,
@@ -303,6 +329,88 @@ fn render_is_bit_identical_for_one_and_two_threads() {
 }
 
 #[test]
+fn skipping_rays_that_cannot_return_changes_no_pixel() {
+    let ocean = small_ocean(0.5);
+    let sampler = ocean.sampler([0.0, 0.0]);
+    let mesh = ocean_grid(&sampler, 40.0, 0.5);
+    let slope = vastocean::render::integrator::max_descent_slope(&mesh).expect("a height field");
+    assert!(slope > 0.0 && slope < 5.0, "{slope}");
+    let accel = embree(mesh);
+    let sky = Sky::analytic(AnalyticSky::default());
+    let render = |skip_slope| {
+        let scene = SceneRef {
+            skip_slope,
+            accel: &accel,
+            ocean: Some(sampler),
+            earth_radius_m: 6_371_000.0,
+            sky: &sky,
+        };
+        render_image(
+            &scene,
+            &equirect(96, Some((5.0, -60.0))),
+            2.0,
+            4,
+            2,
+            &TraceSettings::default(),
+            false,
+        )
+    };
+    let (a, ca) = render(None);
+    let (b, cb) = render(Some(slope));
+    assert!(
+        cb.skipped > 1000 && cb.rays + cb.skipped == ca.rays,
+        "{ca:?} {cb:?}"
+    );
+    assert!(
+        a.pixels
+            .iter()
+            .zip(&b.pixels)
+            .all(|(p, q)| p.map(f32::to_bits) == q.map(f32::to_bits))
+    );
+    // A fold: the middle triangle is wound facing down (an overhang), so a ray under the upper
+    // sheet could meet the inverted one. The shortcut must switch itself off.
+    let folded = Mesh::new(
+        vec![
+            [0.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [1.0, 0.3, 0.0],
+            [1.0, 0.3, 1.0],
+            [0.6, 0.5, 0.0],
+            [0.6, 0.5, 1.0],
+            [1.6, 0.6, 0.0],
+            [1.6, 0.6, 1.0],
+        ],
+        vec![],
+        vec![],
+        vec![
+            [0, 1, 3],
+            [0, 3, 2],
+            [2, 3, 5],
+            [2, 5, 4],
+            [4, 5, 7],
+            [4, 7, 6],
+        ],
+    )
+    .unwrap();
+    assert_eq!(
+        vastocean::render::integrator::max_descent_slope(&folded),
+        None
+    );
+    // Slopes of 1 or more disable it too (see max_descent_slope).
+    let steep = Mesh::new(
+        vec![[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, -1.2, 0.0]],
+        vec![],
+        vec![],
+        vec![[0, 1, 2]],
+    )
+    .unwrap();
+    assert_eq!(
+        vastocean::render::integrator::max_descent_slope(&steep),
+        None
+    );
+}
+
+#[test]
 fn grazing_rays_at_the_horizon_give_no_nan() {
     let ocean = small_ocean(1.5);
     let sampler = ocean.sampler([0.0, 0.0]);
@@ -310,6 +418,7 @@ fn grazing_rays_at_the_horizon_give_no_nan() {
     let mut sky = Sky::analytic(AnalyticSky::default());
     sky.dome_altitude_m = Some(200_000.0);
     let scene = SceneRef {
+        skip_slope: None,
         accel: &accel,
         ocean: Some(sampler),
         earth_radius_m: 6_371_000.0,
@@ -331,4 +440,40 @@ fn grazing_rays_at_the_horizon_give_no_nan() {
             .all(|p| p.iter().all(|v| v.is_finite() && *v >= 0.0))
     );
     assert!(c.hits > 0);
+}
+
+#[test]
+fn render_command_pipeline_writes_exr_png_and_sidecar() {
+    use vastocean::config::SceneConfig;
+    use vastocean::render::pipeline::{render_scene, write_outputs};
+    let mut cfg = SceneConfig::default();
+    cfg.camera.width = 96;
+    cfg.render.spp = 2;
+    cfg.render.threads = 2;
+    let mut r = render_scene(&cfg, false).unwrap();
+    let dir = std::env::temp_dir().join(format!("vastocean-render-{}", std::process::id()));
+    write_outputs(&mut r, &dir.join("scene")).unwrap();
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("scene.json")).unwrap()).unwrap();
+    for key in [
+        "triangles",
+        "seconds_total",
+        "seconds_build",
+        "seconds_trace",
+        "seconds_normal_map",
+        "rays",
+        "mrays_per_s",
+        "nan_count",
+        "wrong_side_count",
+        "exr",
+        "png",
+    ] {
+        assert!(sidecar.get(key).is_some(), "sidecar lacks {key}");
+    }
+    assert_eq!(sidecar["nan_count"], 0);
+    assert!(sidecar["triangles"].as_u64().unwrap() > 1000);
+    let img = vastocean::image_io::read_exr(&dir.join("scene.exr")).unwrap();
+    assert_eq!((img.width, img.height), (96, 48));
+    assert!(dir.join("scene.png").metadata().unwrap().len() > 100);
+    let _ = std::fs::remove_dir_all(dir);
 }

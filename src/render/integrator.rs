@@ -72,6 +72,8 @@ pub struct Counters {
     pub backfacing_shading: u64,
     /// Paths cut at `max_segments` while still bouncing.
     pub truncated: u64,
+    /// Rays in the water known not to meet the surface again, so not traced.
+    pub skipped: u64,
     /// Mapped-normal evaluations, and the nanoseconds spent in the timed 1-in-64 of them.
     pub normal_evals: u64,
     pub normal_timed: u64,
@@ -86,6 +88,7 @@ impl std::ops::AddAssign for Counters {
         self.wrong_side += o.wrong_side;
         self.backfacing_shading += o.backfacing_shading;
         self.truncated += o.truncated;
+        self.skipped += o.skipped;
         self.normal_evals += o.normal_evals;
         self.normal_timed += o.normal_timed;
         self.normal_timed_ns += o.normal_timed_ns;
@@ -113,15 +116,50 @@ pub fn tilt_to_earth(u: f32, v: f32, earth_radius_m: f64, n: Vec3) -> Vec3 {
         return n;
     }
     let theta = (r as f64 / earth_radius_m) as f32;
-    let (s, c) = theta.sin_cos();
+    // Out to the horizon theta < 1e-3 rad, where two Taylor terms are exact in f32 and much
+    // cheaper than sin_cos (this runs at every mapped hit).
+    let (s, c) = if theta < 1e-2 {
+        let t2 = theta * theta;
+        (theta * (1.0 - t2 / 6.0), 1.0 - 0.5 * t2 * (1.0 - t2 / 12.0))
+    } else {
+        theta.sin_cos()
+    };
     // Rotation about the horizontal axis a = (v, 0, -u) / r (Rodrigues' formula).
     let a = Vec3::new(v / r, 0.0, -u / r);
     n * c + a.cross(n) * s + a * a.dot(n) * (1.0 - c)
 }
 
+/// The steepest descent slope (vertical drop per horizontal metre) of any triangle of a mesh
+/// that is a height field in y, or `None` when the shortcut it enables would not be exact:
+/// some triangle is wound facing sideways or down (an overhang, where choppy waves fold; meshes
+/// here are wound counter-clockwise seen from above), or some slope reaches 1. A ray under
+/// such a surface that descends faster than this can never meet it again, so it need not be
+/// traced (see `SceneRef::skip_slope`). Slopes under 1 also guarantee that a ray origin offset
+/// below one triangle is below its neighbours too (two faces sloping opposite ways would need
+/// gradients whose dot product is below -1 to put it above one of them).
+pub fn max_descent_slope(mesh: &Mesh) -> Option<f32> {
+    let mut worst = 0f32;
+    for prim in 0..mesh.triangle_count() as u32 {
+        let [a, b, c] = mesh.triangle(prim).map(Vec3::from);
+        let n = (b - a).cross(c - a);
+        if n == Vec3::ZERO {
+            continue; // degenerate: no area to hit
+        }
+        if n.y <= 0.0 {
+            return None;
+        }
+        worst = worst.max((n.x * n.x + n.z * n.z).sqrt() / n.y);
+    }
+    (worst < 1.0).then_some(worst)
+}
+
 /// What the integrator traces against.
 pub struct SceneRef<'a> {
     pub accel: &'a dyn Accel,
+    /// From [`max_descent_slope`]: rays in the water descending more steeply than this are not
+    /// traced (they cannot hit the surface) and return the upwelling radiance directly. `None`
+    /// traces every ray.
+    pub skip_slope: Option<f32>,
     /// The ocean, for mapped normals (required for `NormalMode::Mapped`).
     pub ocean: Option<Sampler<'a>>,
     pub earth_radius_m: f64,
@@ -217,8 +255,16 @@ impl SceneRef<'_> {
             c.truncated += 1;
             return Vec3::ZERO;
         }
-        c.rays += 1;
         let d = Vec3::from(ray.dir);
+        if in_water
+            && let Some(slope) = self.skip_slope
+            && d.y < 0.0
+            && -d.y > slope * (d.x * d.x + d.z * d.z).sqrt()
+        {
+            c.skipped += 1;
+            return Vec3::from(settings.water.upwelling);
+        }
+        c.rays += 1;
         let Some(hit) = self.accel.intersect(ray) else {
             return if in_water {
                 Vec3::from(settings.water.upwelling)

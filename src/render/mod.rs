@@ -4,11 +4,13 @@
 pub mod camera;
 pub mod film;
 pub mod integrator;
+#[cfg(feature = "embree")]
+pub mod pipeline;
 pub mod sky;
 pub mod water;
 
 pub use camera::{Camera, Projection};
 pub use film::render_image;
 pub use integrator::{Counters, NormalMode, SceneRef, TraceSettings};
-pub use sky::{AnalyticSky, Sky};
+pub use sky::{AnalyticSky, Sky, SkySource};
 pub use water::Water;

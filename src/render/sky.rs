@@ -35,7 +35,7 @@ impl Default for AnalyticSky {
     fn default() -> Self {
         AnalyticSky::Clear {
             sun_elevation_deg: 4.0,
-            sun_azimuth_deg: 0.0,
+            sun_azimuth_deg: 180.0,
             sun_radiance: 2000.0,
             sky_scale: 1.0,
         }
@@ -232,20 +232,32 @@ mod tests {
         let s = AnalyticSky::default();
         let AnalyticSky::Clear {
             sun_elevation_deg,
+            sun_azimuth_deg,
             sun_radiance,
             ..
         } = s
         else {
             unreachable!()
         };
-        let el = sun_elevation_deg.to_radians();
+        let (el, az) = (sun_elevation_deg.to_radians(), sun_azimuth_deg.to_radians());
+        // step away from the sun centre in elevation
         let at = |off: f32| {
-            s.radiance(Vec3::new((el + off).cos(), (el + off).sin(), 0.0))
-                .x
+            s.radiance(Vec3::new(
+                (el + off).cos() * az.cos(),
+                (el + off).sin(),
+                (el + off).cos() * az.sin(),
+            ))
+            .x
         };
         assert!(at(0.0) >= 0.99 * sun_radiance);
         assert!(at(0.9 * SUN_RADIUS_RAD) >= 0.99 * sun_radiance);
         assert!(at(1.1 * SUN_RADIUS_RAD) < 0.01 * sun_radiance);
+        // 0.53 degrees across: the disc ends at the same angle on the other side
+        assert!(
+            at(-0.9 * SUN_RADIUS_RAD) >= 0.99 * sun_radiance
+                && at(-1.1 * SUN_RADIUS_RAD) < 0.01 * sun_radiance
+        );
+        assert!((2.0 * SUN_RADIUS_RAD.to_degrees() - 0.53).abs() < 0.001);
     }
 
     #[test]
