@@ -3,8 +3,8 @@
 
 CARGO      ?= cargo
 # Debian packages the build needs: Embree (headers + library), libclang for bindgen,
-# a C compiler for the shim.
-DEB_PKGS   := libembree-dev libclang-dev pkg-config gcc
+# a C compiler for the shim, and a font for the labels of plots.
+DEB_PKGS   := libembree-dev libclang-dev pkg-config gcc fonts-dejavu-core
 SUDO       := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 OUT        ?= out
 

@@ -131,7 +131,11 @@ impl Default for SkyConfig {
 #[serde(deny_unknown_fields, default)]
 pub struct RenderConfig {
     pub spp: u32,
+    /// Seed of the Monte Carlo samples.
     pub seed: u64,
+    /// Seed of the ocean: which realization of the sea state (kept apart from `seed`, so the
+    /// same sea can be rendered with independent noise).
+    pub ocean_seed: u64,
     /// Worker threads for tessellation, Embree and tracing (0 = all cores).
     pub threads: usize,
     pub normals: NormalMode,
@@ -145,6 +149,7 @@ impl Default for RenderConfig {
         RenderConfig {
             spp: 16,
             seed: 1,
+            ocean_seed: 1,
             threads: 0,
             normals: t.normals,
             max_segments: t.max_segments,

@@ -35,6 +35,10 @@ enum Command {
     /// Render a scene: ocean -> LOD tessellation -> Embree BVH -> path tracing -> EXR + PNG + JSON.
     #[cfg(feature = "embree")]
     Render(RenderArgs),
+    /// The paper's four scenarios (high/low tessellation x with/without normal mapping) and the
+    /// near-horizon statistics against the baseline.
+    #[cfg(feature = "embree")]
+    Compare(CompareArgs),
     /// Tessellate the ocean with the LOD doubling method and report (or export) the mesh.
     Mesh(MeshArgs),
     /// Generate the ocean layers (TMA spectrum, FFT) and report their statistics.
@@ -222,6 +226,149 @@ struct RenderArgs {
     /// Print the JSON sidecar on stdout.
     #[arg(long)]
     json: bool,
+}
+
+#[cfg(feature = "embree")]
+#[derive(clap::Args)]
+#[command(allow_negative_numbers = true)]
+struct CompareArgs {
+    /// Scene file (TOML) with the ocean case, sky, camera and samples; flags override it.
+    #[arg(long)]
+    config: Option<std::path::PathBuf>,
+    /// Wind speed, m/s.
+    #[arg(long)]
+    wind: Option<f64>,
+    /// Fetch, km.
+    #[arg(long)]
+    fetch: Option<f64>,
+    /// Depth, m.
+    #[arg(long)]
+    depth: Option<f64>,
+    /// RMS wave height, m.
+    #[arg(long)]
+    rms: Option<f64>,
+    /// Equirectangular EXR sky map.
+    #[arg(long)]
+    sky: Option<std::path::PathBuf>,
+    /// Full 360 degree image width, pixels.
+    #[arg(long)]
+    width: Option<usize>,
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Rendered elevations TOP:BOTTOM in degrees (default +1:-6).
+    #[arg(long, value_parser = parse_band, allow_hyphen_values = true)]
+    band: Option<(f64, f64)>,
+    /// Analysed elevations TOP:BOTTOM (the paper: 0:-5).
+    #[arg(long, value_parser = parse_band, allow_hyphen_values = true, default_value = "0:-5")]
+    rows: (f64, f64),
+    /// The high tessellation (baseline).
+    #[arg(long, value_enum, default_value_t = vastocean::config::LodChoice::PaperHigh)]
+    high: vastocean::config::LodChoice,
+    /// The low tessellation.
+    #[arg(long, value_enum, default_value_t = vastocean::config::LodChoice::PaperLow)]
+    low: vastocean::config::LodChoice,
+    /// Sample seed (the ocean seed is `render.ocean_seed` in the config).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Output folder.
+    #[arg(long)]
+    out: std::path::PathBuf,
+    /// Print summary.json on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[cfg(feature = "embree")]
+fn compare(a: CompareArgs) -> Result<()> {
+    use vastocean::analysis::{CompareError, CompareOptions, compare};
+    use vastocean::config::{LodConfig, SceneConfig};
+    use vastocean::render::Projection;
+
+    let mut scene = match &a.config {
+        Some(path) => SceneConfig::load(path).map_err(|e| BadInput(e.to_string()))?,
+        None => SceneConfig::default(),
+    };
+    for (field, v) in [
+        (&mut scene.ocean.wind_speed, a.wind),
+        (&mut scene.ocean.fetch_km, a.fetch),
+        (&mut scene.ocean.depth_m, a.depth),
+    ] {
+        if let Some(v) = v {
+            *field = v;
+        }
+    }
+    if a.rms.is_some() {
+        scene.ocean.rms_m = a.rms;
+    }
+    if a.sky.is_some() {
+        scene.sky.file = a.sky.clone();
+    }
+    if let Some(w) = a.width {
+        scene.camera.width = w;
+    }
+    if let Some(s) = a.spp {
+        scene.render.spp = s;
+    }
+    if let Some(s) = a.seed {
+        scene.render.seed = s;
+    }
+    let band = match (a.band, scene.camera.projection) {
+        (Some(b), _) => b,
+        (None, Projection::Equirect { band_deg: Some(b) }) => b,
+        _ => (1.0, -6.0),
+    };
+    scene.camera.projection = Projection::Equirect {
+        band_deg: Some(band),
+    };
+    let lod = |preset| LodConfig {
+        preset,
+        ..scene.lod.clone()
+    };
+    let opts = CompareOptions {
+        high: lod(a.high),
+        low: lod(a.low),
+        scene,
+        rows_deg: a.rows,
+    };
+    for lod in [&opts.high, &opts.low] {
+        let mut c = opts.scene.clone();
+        c.lod = lod.clone();
+        c.validate().map_err(|e| BadInput(e.to_string()))?;
+    }
+    let s = compare(&opts, &a.out, true).map_err(|e| match e {
+        CompareError::Invalid(m) => anyhow::Error::new(BadInput(m)),
+        e => e.into(),
+    })?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&s)?);
+        return Ok(());
+    }
+    println!(
+        "compare: {} rows from {} to {} degrees; band-averaged std of the luminance difference from the baseline:",
+        s.rows, s.rows_deg.0, s.rows_deg.1
+    );
+    println!("  high tessellation, unmapped  {:.5}", s.std_high_unmapped);
+    println!("  low tessellation, mapped     {:.5}", s.std_low_mapped);
+    println!("  low tessellation, unmapped   {:.5}", s.std_low_unmapped);
+    println!("  noise floor                  {:.5}", s.std_noise_floor);
+    println!(
+        "  improvement ratio (low unmapped / low mapped): {:.2}",
+        s.improvement_ratio
+    );
+    for sc in &s.scenarios {
+        println!(
+            "  {:<14} {:>9} triangles  tessellation {:.2} s  BVH {:.2} s  render {:.2} s",
+            sc.name, sc.triangles, sc.seconds_tessellation, sc.seconds_build, sc.seconds_render
+        );
+    }
+    println!(
+        "  wrote {} {} {} and the renders in {}",
+        s.stats_csv.display(),
+        s.stats_png.display(),
+        s.sheet_png.display(),
+        a.out.display()
+    );
+    Ok(())
 }
 
 #[cfg(feature = "embree")]
@@ -498,6 +645,8 @@ fn run(cli: Cli) -> Result<()> {
         Command::Info { threads, json } => info(threads, json),
         Command::Ocean(a) => ocean(a),
         Command::Mesh(a) => mesh(a),
+        #[cfg(feature = "embree")]
+        Command::Compare(a) => compare(a),
         #[cfg(feature = "embree")]
         Command::Render(a) => render(a),
         #[cfg(feature = "embree")]

@@ -477,3 +477,56 @@ fn render_command_pipeline_writes_exr_png_and_sidecar() {
     assert!(dir.join("scene.png").metadata().unwrap().len() > 100);
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn tiny_compare_runs_end_to_end_and_writes_every_file() {
+    use vastocean::analysis::{CompareOptions, SCENARIOS, compare};
+    use vastocean::config::{LodChoice, LodConfig, SceneConfig};
+    let mut scene = SceneConfig::default();
+    scene.camera.width = 512;
+    scene.camera.projection = Projection::Equirect {
+        band_deg: Some((1.0, -6.0)),
+    };
+    scene.render.spp = 2;
+    scene.render.threads = 2;
+    let high = LodConfig {
+        preset: LodChoice::Custom,
+        near_size_m: Some(0.3),
+        double_distance_m: Some(18.0),
+        ..LodConfig::default()
+    };
+    let low = LodConfig {
+        preset: LodChoice::PaperLow,
+        ..LodConfig::default()
+    };
+    let opts = CompareOptions {
+        scene,
+        high,
+        low,
+        rows_deg: (0.0, -5.0),
+    };
+    let dir = std::env::temp_dir().join(format!("vastocean-compare-{}", std::process::id()));
+    let s = compare(&opts, &dir, false).unwrap();
+    for name in SCENARIOS {
+        for ext in ["exr", "png"] {
+            assert!(
+                dir.join(format!("{name}.{ext}")).is_file(),
+                "{name}.{ext} missing"
+            );
+        }
+    }
+    for f in ["stats.csv", "stats.png", "sheet.png", "summary.json"] {
+        assert!(dir.join(f).metadata().unwrap().len() > 50, "{f}");
+    }
+    // 512 px: 256 rows for 180 degrees, 0.70 degree rows; centres between 0 and -5 degrees: 7
+    assert_eq!(s.rows, 7);
+    let csv = std::fs::read_to_string(dir.join("stats.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + s.rows);
+    assert!(s.std_low_unmapped > 0.0 && s.improvement_ratio.is_finite());
+    assert!(s.scenarios.iter().all(|sc| sc.nan_count == 0));
+    assert_eq!(
+        s.scenarios[0].triangles, s.scenarios[1].triangles,
+        "both high scenarios trace one mesh"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -234,7 +234,7 @@ pub struct Scene {
     mesh: Arc<Mesh>,
     build_seconds: f64,
     options: BuildOptions,
-    _device: Arc<Device>,
+    device: Arc<Device>,
 }
 
 // SAFETY: a committed scene is only read (rtcIntersect*, rtcOccluded*, rtcInterpolate), which
@@ -321,8 +321,13 @@ impl Scene {
             mesh,
             build_seconds,
             options,
-            _device: device.clone(),
+            device: device.clone(),
         })
+    }
+
+    /// The Embree version of the device this scene was built on.
+    pub fn device_version(&self) -> String {
+        self.device.version()
     }
 
     /// Wall-clock seconds the BVH build (rtcCommitScene) took.
@@ -428,7 +433,7 @@ impl Accel for Scene {
 impl Drop for Scene {
     fn drop(&mut self) {
         // SAFETY: the scene (and the geometry it owns) is released once; the device outlives it
-        // through `_device`.
+        // through `device`.
         unsafe { ffi::vo_scene_release(self.raw.as_ptr()) }
     }
 }

@@ -12,12 +12,13 @@ use thiserror::Error;
 
 use super::integrator::max_descent_slope;
 use super::{Camera, Counters, SceneRef, Sky, render_image};
+use crate::accel::Accel;
 use crate::accel::embree::{
     BuildOptions, Device, EmbreeError, Scene, flush_denormals_on_this_thread,
 };
 use crate::config::{ConfigError, SceneConfig};
 use crate::image_io::{ImageError, RgbImage, auto_exposure, write_exr, write_json, write_png};
-use crate::lod::{LodError, tessellate};
+use crate::lod::{LodError, LodParams, LodStats, tessellate};
 use crate::ocean::{OceanError, Surface};
 
 #[derive(Debug, Error)]
@@ -59,6 +60,7 @@ pub struct RenderReport {
     pub seconds_normal_map: f64,
     /// `seconds_normal_map` as a share of `seconds_trace`.
     pub normal_map_share: f64,
+    /// Sum of the phases above (ocean, tessellation, BVH build, trace).
     pub seconds_total: f64,
     pub rays: u64,
     pub mrays_per_s: f64,
@@ -96,11 +98,26 @@ pub fn make_sky(cfg: &SceneConfig) -> Result<Sky, RenderError> {
     Ok(sky)
 }
 
-/// Renders a validated scene; `progress` shows bars on stderr. Output paths are filled in by
-/// [`write_outputs`].
-pub fn render_scene(cfg: &SceneConfig, progress: bool) -> Result<Rendered, RenderError> {
+/// Everything a render needs that does not depend on the camera's samples: the ocean, its
+/// tessellation, the BVH and the sky, built once and traced as often as wanted (the scenario
+/// comparison traces one mesh with both normal modes and two seeds).
+pub struct Prepared {
+    pub ocean: Surface,
+    pub lod: LodParams,
+    pub scene: Scene,
+    pub sky: Sky,
+    pub skip_slope: Option<f32>,
+    pub stats: LodStats,
+    pub seconds_ocean: f64,
+    pub seconds_tessellation: f64,
+    pub threads: usize,
+    pool: rayon::ThreadPool,
+    camera_position_m: [f64; 2],
+}
+
+/// Builds the ocean, the tessellation and the BVH of a validated scene.
+pub fn prepare(cfg: &SceneConfig) -> Result<Prepared, RenderError> {
     cfg.validate()?;
-    let t_total = Instant::now();
     let threads = if cfg.render.threads == 0 {
         std::thread::available_parallelism().map_or(1, |n| n.get())
     } else {
@@ -112,71 +129,93 @@ pub fn render_scene(cfg: &SceneConfig, progress: bool) -> Result<Rendered, Rende
         .build()?;
     let sky = make_sky(cfg)?;
     let lod = cfg.lod_params()?;
+    let (ocean, seconds_ocean, mesh, stats, seconds_tessellation) =
+        pool.install(|| -> Result<_, RenderError> {
+            let t = Instant::now();
+            let ocean = Surface::new(&cfg.ocean, cfg.render.ocean_seed)?;
+            let seconds_ocean = t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            let (mesh, stats) = tessellate(&lod, &ocean.sampler(cfg.camera.position_m))?;
+            Ok((ocean, seconds_ocean, mesh, stats, t.elapsed().as_secs_f64()))
+        })?;
+    let skip_slope = max_descent_slope(&mesh);
+    let device = Device::new(threads)?;
+    let scene = Scene::new(&device, Arc::new(mesh), BuildOptions::default())?;
+    Ok(Prepared {
+        ocean,
+        lod,
+        scene,
+        sky,
+        skip_slope,
+        stats,
+        seconds_ocean,
+        seconds_tessellation,
+        threads,
+        pool,
+        camera_position_m: cfg.camera.position_m,
+    })
+}
 
-    pool.install(|| {
-        let t = Instant::now();
-        let ocean = Surface::new(&cfg.ocean, cfg.render.seed)?;
-        let seconds_ocean = t.elapsed().as_secs_f64();
-        let sampler = ocean.sampler(cfg.camera.position_m);
-
-        let t = Instant::now();
-        let (mesh, stats) = tessellate(&lod, &sampler)?;
-        let seconds_tessellation = t.elapsed().as_secs_f64();
-        let (triangles, vertices, mesh_bytes) =
-            (mesh.triangle_count(), mesh.vertex_count(), mesh.bytes());
-
-        let skip_slope = max_descent_slope(&mesh);
-        let device = Device::new(threads)?;
-        let scene = Scene::new(&device, Arc::new(mesh), BuildOptions::default())?;
-        let seconds_build = scene.build_seconds();
-
+impl Prepared {
+    /// Traces the camera, samples and normal mode of `cfg` through the prepared scene. The
+    /// ocean, LOD and sky sections of `cfg` are those `prepare` used; only `camera` (besides its
+    /// position and height) and `render` may differ.
+    pub fn render(&self, cfg: &SceneConfig, progress: bool) -> Result<Rendered, RenderError> {
+        cfg.validate()?;
         let camera = Camera::new(cfg.camera.projection, cfg.camera.width, cfg.camera.aspect);
+        let sampler = self.ocean.sampler(self.camera_position_m);
         let scene_ref = SceneRef {
-            accel: &scene,
-            skip_slope,
+            accel: &self.scene,
+            skip_slope: self.skip_slope,
             ocean: Some(sampler),
-            earth_radius_m: lod.earth_radius_m,
-            sky: &sky,
+            earth_radius_m: self.lod.earth_radius_m,
+            sky: &self.sky,
         };
         let t = Instant::now();
-        let (image, c) = render_image(
-            &scene_ref,
-            &camera,
-            cfg.camera.height_m as f32,
-            cfg.render.spp,
-            cfg.render.seed,
-            &cfg.trace_settings(),
-            progress,
-        );
+        let (image, c) = self.pool.install(|| {
+            render_image(
+                &scene_ref,
+                &camera,
+                cfg.camera.height_m as f32,
+                cfg.render.spp,
+                cfg.render.seed,
+                &cfg.trace_settings(),
+                progress,
+            )
+        });
         let seconds_trace = t.elapsed().as_secs_f64();
-        let seconds_normal_map = c.normal_map_thread_seconds() / threads as f64;
-
+        let seconds_normal_map = c.normal_map_thread_seconds() / self.threads as f64;
+        let mesh = self.scene.mesh();
+        let seconds_build = self.scene.build_seconds();
         let report = RenderReport {
             width: camera.width,
             height: camera.height,
             spp: cfg.render.spp,
             seed: cfg.render.seed,
-            threads,
-            embree_version: device.version(),
-            triangles,
-            vertices,
-            rings: stats.rings,
-            mesh_bytes,
-            tessellation_max_distance_m: stats.max_distance_m,
-            seconds_ocean,
-            seconds_tessellation,
+            threads: self.threads,
+            embree_version: self.scene.device_version(),
+            triangles: mesh.triangle_count(),
+            vertices: mesh.vertex_count(),
+            rings: self.stats.rings,
+            mesh_bytes: mesh.bytes(),
+            tessellation_max_distance_m: self.stats.max_distance_m,
+            seconds_ocean: self.seconds_ocean,
+            seconds_tessellation: self.seconds_tessellation,
             seconds_build,
             seconds_trace,
             seconds_normal_map,
             normal_map_share: seconds_normal_map / seconds_trace.max(1e-12),
-            seconds_total: t_total.elapsed().as_secs_f64(),
+            seconds_total: self.seconds_ocean
+                + self.seconds_tessellation
+                + seconds_build
+                + seconds_trace,
             rays: c.rays,
             mrays_per_s: c.rays as f64 / seconds_trace.max(1e-12) / 1e6,
             nan_count: c.nan,
             wrong_side_count: c.wrong_side,
             backfacing_shading_count: c.backfacing_shading,
             truncated_paths: c.truncated,
-            skip_slope,
+            skip_slope: self.skip_slope,
             skipped_rays: c.skipped,
             counters: c,
             exr: PathBuf::new(),
@@ -189,7 +228,13 @@ pub fn render_scene(cfg: &SceneConfig, progress: bool) -> Result<Rendered, Rende
             camera,
             report,
         })
-    })
+    }
+}
+
+/// Renders a validated scene end to end; `progress` shows a bar on stderr. Output paths are
+/// filled in by [`write_outputs`].
+pub fn render_scene(cfg: &SceneConfig, progress: bool) -> Result<Rendered, RenderError> {
+    prepare(cfg)?.render(cfg, progress)
 }
 
 /// Writes `<prefix>.exr`, `<prefix>.png` and `<prefix>.json`, each atomically.

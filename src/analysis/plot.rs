@@ -1,0 +1,166 @@
+//! Pictures of a comparison, drawn with plotters: the statistics plot (the paper's Figure 5:
+//! azimuth-averaged mean and standard deviation of the luminance difference against elevation;
+//! green = high unmapped, blue = low mapped, yellow = low unmapped, grey = noise floor) and the
+//! contact sheet of the four renders (the paper's Figure 4). Text is drawn with ab_glyph from
+//! Debian's DejaVu Sans (package fonts-dejavu-core, installed by `make setup`).
+
+use std::path::Path;
+use std::sync::OnceLock;
+
+use plotters::prelude::*;
+use plotters::style::{FontStyle, register_font};
+
+use super::RowStat;
+use crate::image_io::{RgbImage, tonemap, write_png_rgb8};
+
+const FONT_PATHS: [&str; 2] = [
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+];
+
+/// Registers the label font once per process.
+fn font() -> Result<(), String> {
+    static FONT: OnceLock<Result<(), String>> = OnceLock::new();
+    FONT.get_or_init(|| {
+        let bytes = FONT_PATHS.iter().find_map(|p| std::fs::read(p).ok()).ok_or_else(|| {
+            format!("no font for plot labels at {}: install Debian's fonts-dejavu-core (`make setup`)", FONT_PATHS[0])
+        })?;
+        // plotters keeps registered fonts for the life of the process.
+        let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+        register_font("sans-serif", FontStyle::Normal, bytes).map_err(|_| "DejaVu Sans is not a usable font".to_string())
+    })
+    .clone()
+}
+
+/// Draws into an RGB buffer and writes it as PNG (atomically).
+fn draw_png(
+    path: &Path,
+    size: (u32, u32),
+    draw: impl FnOnce(DrawingArea<BitMapBackend, plotters::coord::Shift>) -> Result<(), String>,
+) -> Result<(), String> {
+    font()?;
+    let mut buf = vec![255u8; (size.0 * size.1 * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, size).into_drawing_area();
+        draw(root.clone())?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    write_png_rgb8(path, size.0, size.1, &buf).map_err(|e| e.to_string())
+}
+
+/// Scenario curves in `stats` order (high unmapped, low mapped, low unmapped, noise floor).
+const CURVES: [(&str, RGBColor); 4] = [
+    ("high tessellation, unmapped", RGBColor(0, 160, 60)),
+    ("low tessellation, mapped", RGBColor(30, 80, 220)),
+    ("low tessellation, unmapped", RGBColor(225, 180, 0)),
+    (
+        "noise floor (baseline, other seed)",
+        RGBColor(150, 150, 150),
+    ),
+];
+
+/// Two panels: mean and standard deviation of Y(scenario) - Y(baseline) against elevation.
+pub fn stats_plot(path: &Path, stats: &[Vec<RowStat>], rows_deg: (f64, f64)) -> Result<(), String> {
+    draw_png(path, (1400, 560), |root| {
+        let e = |e: DrawingAreaErrorKind<_>| e.to_string();
+        root.fill(&WHITE).map_err(e)?;
+        let (left, right) = root.split_horizontally(700);
+        for (panel, title, pick) in [
+            (left, "mean of luminance difference", 0usize),
+            (right, "standard deviation of luminance difference", 1),
+        ] {
+            let value = |r: &RowStat| if pick == 0 { r.mean } else { r.std };
+            let (mut lo, mut hi) = stats
+                .iter()
+                .flatten()
+                .map(value)
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                    (a.min(v), b.max(v))
+                });
+            if pick == 1 {
+                lo = 0.0;
+            }
+            // An empty or flat series (identical images) still needs a non-empty axis range.
+            if !lo.is_finite() || !hi.is_finite() {
+                (lo, hi) = (0.0, 1e-6);
+            } else if hi <= lo {
+                hi = lo + 1e-6;
+            }
+            let pad = 0.05 * (hi - lo);
+            let mut chart = ChartBuilder::on(&panel)
+                .caption(title, ("sans-serif", 22))
+                .margin(12)
+                .x_label_area_size(44)
+                .y_label_area_size(80)
+                .build_cartesian_2d(
+                    rows_deg.1..rows_deg.0,
+                    (lo - if pick == 0 { pad } else { 0.0 })..(hi + pad),
+                )
+                .map_err(e)?;
+            chart
+                .configure_mesh()
+                .x_desc("elevation (degrees)")
+                .y_desc("relative luminance difference")
+                .label_style(("sans-serif", 15))
+                .axis_desc_style(("sans-serif", 16))
+                .draw()
+                .map_err(e)?;
+            for (rows, (label, color)) in stats.iter().zip(CURVES) {
+                chart
+                    .draw_series(LineSeries::new(
+                        rows.iter().map(|r| (r.elevation_deg, value(r))),
+                        color.stroke_width(2),
+                    ))
+                    .map_err(e)?
+                    .label(label)
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3))
+                    });
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 14))
+                .position(SeriesLabelPosition::UpperLeft)
+                .draw()
+                .map_err(e)?;
+        }
+        Ok(())
+    })
+}
+
+/// The renders stacked top to bottom with a caption above each, tone-mapped with one exposure.
+pub fn contact_sheet(
+    path: &Path,
+    images: &[&RgbImage],
+    labels: &[String],
+    exposure: f32,
+) -> Result<(), String> {
+    const CAPTION: u32 = 30;
+    let w = images.iter().map(|i| i.width).max().unwrap_or(1) as u32;
+    let h: u32 = images.iter().map(|i| i.height as u32 + CAPTION).sum();
+    draw_png(path, (w, h), |root| {
+        let e = |e: DrawingAreaErrorKind<_>| e.to_string();
+        root.fill(&WHITE).map_err(e)?;
+        let mut y0 = 0i32;
+        for (img, label) in images.iter().zip(labels) {
+            root.draw(&Text::new(
+                label.as_str(),
+                (8, y0 + 6),
+                ("sans-serif", 18).into_font().color(&BLACK),
+            ))
+            .map_err(e)?;
+            y0 += CAPTION as i32;
+            for y in 0..img.height {
+                for x in 0..img.width {
+                    let [r, g, b] = tonemap(img.get(x, y), exposure);
+                    root.draw_pixel((x as i32, y0 + y as i32), &RGBColor(r, g, b))
+                        .map_err(e)?;
+                }
+            }
+            y0 += img.height as i32;
+        }
+        Ok(())
+    })
+}
