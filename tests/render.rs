@@ -49,6 +49,22 @@ fn small_ocean(choppiness: f64) -> Surface {
     Surface::new(&params, 7).unwrap()
 }
 
+/// The integrator's view of a test scene, tracing every ray (no skip shortcut).
+fn scene_ref<'a>(
+    accel: &'a Scene,
+    sampler: Sampler<'a>,
+    earth_radius_m: f64,
+    sky: &'a Sky,
+) -> SceneRef<'a> {
+    SceneRef {
+        accel,
+        skip_slope: None,
+        ocean: Some(sampler),
+        earth_radius_m,
+        sky,
+    }
+}
+
 fn embree(mesh: Mesh) -> Scene {
     Scene::new(
         &Device::new(2).unwrap(),
@@ -90,13 +106,7 @@ fn white_furnace_every_pixel_equals_the_sky() {
     let accel = embree(ocean_grid(&sampler, 60.0, 0.5));
     let l = [0.5f32, 0.7, 1.0];
     let sky = Sky::analytic(AnalyticSky::Uniform { radiance: l });
-    let scene = SceneRef {
-        skip_slope: None,
-        accel: &accel,
-        ocean: Some(sampler),
-        earth_radius_m: 6_371_000.0,
-        sky: &sky,
-    };
+    let scene = scene_ref(&accel, sampler, 6_371_000.0, &sky);
     let water = Water {
         absorption: [0.0; 3],
         upwelling: l,
@@ -137,13 +147,7 @@ fn flat_sea_matches_the_fresnel_weighted_mirror_lookup() {
     let (zenith, horizon) = ([0.1f32, 0.2, 0.6], [0.9f32, 0.8, 0.7]);
     let sky = Sky::analytic(AnalyticSky::Gradient { zenith, horizon });
     // A flat mesh: no earth curvature, so the mapped normal is +y like the geometry.
-    let scene = SceneRef {
-        skip_slope: None,
-        accel: &accel,
-        ocean: Some(sampler),
-        earth_radius_m: f64::INFINITY,
-        sky: &sky,
-    };
+    let scene = scene_ref(&accel, sampler, f64::INFINITY, &sky);
     let water = Water::default();
     let settings = TraceSettings {
         water,
@@ -184,13 +188,7 @@ fn mapped_normal_is_the_ocean_normal_at_the_hit() {
     let sampler = ocean.sampler([0.0, 0.0]);
     let accel = embree(ocean_grid(&sampler, 20.0, 0.8));
     let sky = Sky::analytic(AnalyticSky::default());
-    let scene = SceneRef {
-        skip_slope: None,
-        accel: &accel,
-        ocean: Some(sampler),
-        earth_radius_m: f64::INFINITY,
-        sky: &sky,
-    };
+    let scene = scene_ref(&accel, sampler, f64::INFINITY, &sky);
     let mut rng = vastocean::rng::Rng::keyed(&[5]);
     let mut max_vertex_err = 0f32;
     for _ in 0..2000 {
@@ -253,13 +251,7 @@ fn vertex_and_mapped_differ_on_a_coarse_mesh_and_agree_on_a_fine_one() {
     );
     let diff = |cell: f32| {
         let accel = embree(ocean_grid(&sampler, 12.0, cell));
-        let scene = SceneRef {
-            skip_slope: None,
-            accel: &accel,
-            ocean: Some(sampler),
-            earth_radius_m: f64::INFINITY,
-            sky: &sky,
-        };
+        let scene = scene_ref(&accel, sampler, f64::INFINITY, &sky);
         let render = |normals| {
             render_image(
                 &scene,
@@ -293,13 +285,7 @@ fn render_is_bit_identical_for_one_and_two_threads() {
     let sampler = ocean.sampler([0.0, 0.0]);
     let accel = embree(ocean_grid(&sampler, 40.0, 0.5));
     let sky = Sky::analytic(AnalyticSky::default());
-    let scene = SceneRef {
-        skip_slope: None,
-        accel: &accel,
-        ocean: Some(sampler),
-        earth_radius_m: 6_371_000.0,
-        sky: &sky,
-    };
+    let scene = scene_ref(&accel, sampler, 6_371_000.0, &sky);
     let render = |threads| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -417,13 +403,7 @@ fn grazing_rays_at_the_horizon_give_no_nan() {
     let accel = embree(ocean_grid(&sampler, 300.0, 1.0));
     let mut sky = Sky::analytic(AnalyticSky::default());
     sky.dome_altitude_m = Some(200_000.0);
-    let scene = SceneRef {
-        skip_slope: None,
-        accel: &accel,
-        ocean: Some(sampler),
-        earth_radius_m: 6_371_000.0,
-        sky: &sky,
-    };
+    let scene = scene_ref(&accel, sampler, 6_371_000.0, &sky);
     let (img, c) = render_image(
         &scene,
         &equirect(720, Some((1.0, -2.0))),
