@@ -1,5 +1,6 @@
 //! Integration tests: one binary, one module per subsystem.
 
+mod bvh;
 mod common;
 #[cfg(feature = "embree")]
 mod embree;

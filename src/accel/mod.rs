@@ -7,6 +7,9 @@
 //! f64 loop, the oracle the tests compare every other backend against).
 
 pub mod brute;
+pub mod bvh;
+#[cfg(feature = "embree")]
+pub mod crosscheck;
 #[cfg(feature = "embree")]
 pub mod embree;
 

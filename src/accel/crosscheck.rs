@@ -1,0 +1,215 @@
+//! Cross-check of the two production backends: the same rays traced through Embree (robust
+//! build, [`BuildOptions::default`]) and through the Rust [`Bvh`] (Woop, Benthin & Wald 2013
+//! watertight intersection), compared ray by ray and timed on the same rayon pool.
+//!
+//! The two use different f32 arithmetic, so a ray that passes within rounding distance of an
+//! edge, or meets two surfaces at the same distance, may legitimately get different answers.
+//! Such disagreements are counted as explained; anything else is unexplained and is a bug in
+//! one of them.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::bvh::Bvh;
+use super::embree::{BuildOptions, Device, EmbreeError, Scene};
+use super::{Accel, Hit, Ray};
+use crate::mesh::Mesh;
+use crate::rng::Rng;
+
+/// Barycentric distance from an edge within which f32 rounding may flip the triangle.
+pub const EDGE_TOLERANCE: f64 = 1e-4;
+/// Relative difference in t within which two hits are a tie.
+pub const TIE_TOLERANCE: f64 = 1e-5;
+/// Rays per rayon task when tracing.
+const CHUNK: usize = 1024;
+
+/// What [`crosscheck`] found.
+#[derive(Clone, Debug, Serialize)]
+pub struct CrossReport {
+    pub rays: usize,
+    /// Rays with the same answer: both miss, or both hit the same triangle.
+    pub agree_fraction: f64,
+    pub same_prim: usize,
+    pub both_miss: usize,
+    pub disagreements: usize,
+    /// Disagreements where the ray passes within [`EDGE_TOLERANCE`] of an edge or vertex of
+    /// either backend's triangle, or both hits lie at the same t within [`TIE_TOLERANCE`].
+    pub explained_disagreements: usize,
+    pub unexplained_disagreements: usize,
+    /// Largest `|t_rust - t_embree| / t_embree` over rays that hit the same triangle.
+    pub max_rel_dt: f64,
+    pub embree_mrays_per_s: f64,
+    pub rust_mrays_per_s: f64,
+    pub embree_build_s: f64,
+    pub rust_build_s: f64,
+}
+
+/// Builds both backends over `mesh` and traces `rays` through each, with `threads` threads
+/// (0 = all cores) for the builds and the tracing.
+pub fn crosscheck(
+    mesh: Arc<Mesh>,
+    rays: &[Ray],
+    threads: usize,
+) -> Result<CrossReport, EmbreeError> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a rayon pool with a valid thread count");
+    let device = Device::new(threads)?;
+    let scene = Scene::new(&device, mesh.clone(), BuildOptions::default())?;
+    let bvh = pool.install(|| Bvh::build(mesh.clone()));
+    let (embree_hits, embree_s) = pool.install(|| trace(&scene, rays));
+    let (rust_hits, rust_s) = pool.install(|| trace(&bvh, rays));
+    let per_ray: Vec<Outcome> = pool.install(|| {
+        rays.par_iter()
+            .zip(&embree_hits)
+            .zip(&rust_hits)
+            .map(|((r, e), b)| compare(&mesh, r, *e, *b))
+            .collect()
+    });
+    let count = |f: fn(&Outcome) -> bool| per_ray.iter().filter(|o| f(o)).count();
+    let same_prim = count(|o| matches!(o, Outcome::SamePrim(_)));
+    let both_miss = count(|o| matches!(o, Outcome::BothMiss));
+    let explained = count(|o| matches!(o, Outcome::Explained));
+    let unexplained = count(|o| matches!(o, Outcome::Unexplained));
+    let max_rel_dt = per_ray
+        .iter()
+        .filter_map(|o| match o {
+            Outcome::SamePrim(d) => Some(*d),
+            _ => None,
+        })
+        .fold(0.0, f64::max);
+    let n = rays.len();
+    let mrays = |s: f64| if s > 0.0 { n as f64 / s / 1e6 } else { 0.0 };
+    Ok(CrossReport {
+        rays: n,
+        agree_fraction: if n == 0 {
+            1.0
+        } else {
+            (same_prim + both_miss) as f64 / n as f64
+        },
+        same_prim,
+        both_miss,
+        disagreements: explained + unexplained,
+        explained_disagreements: explained,
+        unexplained_disagreements: unexplained,
+        max_rel_dt,
+        embree_mrays_per_s: mrays(embree_s),
+        rust_mrays_per_s: mrays(rust_s),
+        embree_build_s: scene.build_seconds(),
+        rust_build_s: bvh.build_seconds(),
+    })
+}
+
+/// Closest hits of `rays` through `accel` in parallel chunks, and the seconds it took. The
+/// rays are copied first (outside the timing) because `intersect_many` takes them mutably.
+pub fn trace(accel: &dyn Accel, rays: &[Ray]) -> (Vec<Option<Hit>>, f64) {
+    let mut rays = rays.to_vec();
+    let mut hits = vec![None; rays.len()];
+    let start = Instant::now();
+    rays.par_chunks_mut(CHUNK)
+        .zip(hits.par_chunks_mut(CHUNK))
+        .for_each(|(r, h)| accel.intersect_many(r, h));
+    (hits, start.elapsed().as_secs_f64())
+}
+
+enum Outcome {
+    /// Same triangle, with this relative difference in t.
+    SamePrim(f64),
+    BothMiss,
+    Explained,
+    Unexplained,
+}
+
+fn compare(mesh: &Mesh, ray: &Ray, embree: Option<Hit>, rust: Option<Hit>) -> Outcome {
+    match (embree, rust) {
+        (None, None) => Outcome::BothMiss,
+        (Some(e), Some(r)) if e.prim == r.prim => {
+            let dt = (r.t as f64 - e.t as f64).abs() / (e.t as f64).abs().max(f64::MIN_POSITIVE);
+            Outcome::SamePrim(dt)
+        }
+        (e, r) => {
+            let tie = match (e, r) {
+                (Some(e), Some(r)) => {
+                    let (a, b) = (e.t as f64, r.t as f64);
+                    (a - b).abs() <= TIE_TOLERANCE * a.abs().max(b.abs())
+                }
+                _ => false,
+            };
+            let near_edge = [e, r]
+                .into_iter()
+                .flatten()
+                .any(|h| edge_distance(ray, mesh.triangle(h.prim)) < EDGE_TOLERANCE);
+            if tie || near_edge {
+                Outcome::Explained
+            } else {
+                Outcome::Unexplained
+            }
+        }
+    }
+}
+
+/// How far, in barycentric units, the ray's line passes from the nearest edge of `tri`
+/// (inside or outside it), computed in f64; zero for a line parallel to the triangle or a
+/// degenerate triangle, where any answer is a matter of rounding.
+pub fn edge_distance(ray: &Ray, tri: [[f32; 3]; 3]) -> f64 {
+    let f = |a: [f32; 3]| a.map(|c| c as f64);
+    let (o, d) = (f(ray.org), f(ray.dir));
+    let (p0, p1, p2) = (f(tri[0]), f(tri[1]), f(tri[2]));
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let (e1, e2) = (sub(p1, p0), sub(p2, p0));
+    let pv = cross(d, e2);
+    let det = dot(e1, pv);
+    if det == 0.0 || !det.is_finite() {
+        return 0.0;
+    }
+    let tv = sub(o, p0);
+    let u = dot(tv, pv) / det;
+    let v = dot(d, cross(tv, e1)) / det;
+    [u, v, 1.0 - u - v]
+        .into_iter()
+        .map(f64::abs)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// `n` rays from random points above `mesh`'s bounding box (between one and two box heights,
+/// plus a metre, over its top) aimed at random points inside the box. Deterministic in `seed`.
+pub fn random_rays_over(mesh: &Mesh, n: usize, seed: u64) -> Vec<Ray> {
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for p in mesh.positions() {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let height = hi[1] - lo[1] + 1.0;
+    let mut r = Rng::keyed(&[seed, 0x6f76_6572]);
+    (0..n)
+        .map(|_| {
+            let org = [
+                r.range(lo[0], hi[0]),
+                hi[1] + height * (1.0 + r.f32()),
+                r.range(lo[2], hi[2]),
+            ];
+            let target = [
+                r.range(lo[0], hi[0]),
+                r.range(lo[1], hi[1]),
+                r.range(lo[2], hi[2]),
+            ];
+            let d: [f32; 3] = std::array::from_fn(|k| target[k] - org[k]);
+            let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            Ray::new(org, d.map(|c| c / len))
+        })
+        .collect()
+}
