@@ -25,9 +25,9 @@ build: setup
 	$(CARGO) build --release
 
 # The default scene: camera 2 m above the sea, full 360 degrees, paper-low tessellation with
-# normal mapping, a low sun. Prints where the PNG is.
+# normal mapping, the shipped clear sky with the sun 3 degrees up. Prints where the PNG is.
 run: build
-	./target/release/vastocean render --out $(OUT)/default
+	./target/release/vastocean render --sky skies/clear-sun03.exr --out $(OUT)/default
 
 test: setup
 	$(CARGO) test --all-targets -- --quiet

@@ -127,6 +127,17 @@ impl Default for SkyConfig {
     }
 }
 
+/// Which BVH traces the scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Backend {
+    /// Debian's Embree through the C shim.
+    #[default]
+    Embree,
+    /// The pure-Rust BVH (src/accel/bvh.rs).
+    Rust,
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RenderConfig {
@@ -141,6 +152,7 @@ pub struct RenderConfig {
     pub normals: NormalMode,
     pub max_segments: u32,
     pub branch_depth: u32,
+    pub backend: Backend,
 }
 
 impl Default for RenderConfig {
@@ -154,6 +166,7 @@ impl Default for RenderConfig {
             normals: t.normals,
             max_segments: t.max_segments,
             branch_depth: t.branch_depth,
+            backend: Backend::Embree,
         }
     }
 }
@@ -264,7 +277,7 @@ impl SceneConfig {
         }
         for (name, v) in [
             ("water.absorption", w.absorption),
-            ("water.upwelling", w.upwelling),
+            ("water.upwelling_rrs", w.upwelling_rrs),
         ] {
             if !v.iter().all(|x| x.is_finite() && *x >= 0.0) {
                 return Err(invalid(name, "finite and >= 0", format!("{v:?}")));
@@ -334,12 +347,14 @@ impl SceneConfig {
         Ok(p)
     }
 
-    pub fn trace_settings(&self) -> TraceSettings {
+    /// The integrator's settings under a sky of downwelling irradiance `sky_irradiance`.
+    pub fn trace_settings(&self, sky_irradiance: glam::Vec3) -> TraceSettings {
         TraceSettings {
             normals: self.render.normals,
             max_segments: self.render.max_segments,
             branch_depth: self.render.branch_depth,
             water: self.water,
+            upwelling: self.water.upwelling(sky_irradiance).to_array(),
         }
     }
 }

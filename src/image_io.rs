@@ -181,6 +181,51 @@ pub fn write_json(path: &Path, value: &impl serde::Serialize) -> Result<(), Imag
     })
 }
 
+/// Writes a linear-RGB EXR with half-float (f16) channels R, G, B and PIZ compression, the
+/// compact form for shipped sky maps. Values beyond half's range (65504) are refused rather than
+/// written as infinity.
+pub fn write_exr_half(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
+    use exr::prelude::*;
+    let max = f16::MAX.to_f32();
+    if let Some(i) = img
+        .pixels
+        .iter()
+        .position(|p| p.iter().any(|c| !c.is_finite() || c.abs() > max))
+    {
+        return Err(ImageError::Invalid {
+            path: path.to_path_buf(),
+            message: format!(
+                "texel ({}, {}) is {:?}: not representable as half float (finite, |x| <= 65504)",
+                i % img.width.max(1),
+                i / img.width.max(1),
+                img.pixels[i]
+            ),
+        });
+    }
+    let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+        let c = img.get(p.x(), p.y());
+        (
+            f16::from_f32(c[0]),
+            f16::from_f32(c[1]),
+            f16::from_f32(c[2]),
+        )
+    });
+    let mut layer = Layer::new(
+        (img.width, img.height),
+        LayerAttributes::default(),
+        Encoding::SMALL_LOSSLESS,
+        channels,
+    );
+    layer.encoding.compression = Compression::PIZ;
+    let image = Image::from_layer(layer);
+    write_atomically(path, |w| {
+        image
+            .write()
+            .to_buffered(w)
+            .map_err(|e| std::io::Error::other(e.to_string()))
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

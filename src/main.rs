@@ -39,10 +39,17 @@ enum Command {
     /// near-horizon statistics against the baseline.
     #[cfg(feature = "embree")]
     Compare(CompareArgs),
+    /// Trace the same rays through Embree and the pure-Rust BVH and report where they disagree;
+    /// also render a small scene with both.
+    #[cfg(feature = "embree")]
+    Crosscheck(CrosscheckArgs),
     /// Tessellate the ocean with the LOD doubling method and report (or export) the mesh.
     Mesh(MeshArgs),
     /// Generate the ocean layers (TMA spectrum, FFT) and report their statistics.
     Ocean(OceanArgs),
+    /// Sky maps: generate (Preetham clear, CIE overcast, partly cloudy), import an HDR
+    /// photograph with the ground removed, report statistics, make a contact sheet.
+    Sky(SkyArgs),
     /// Embree smoke run: build a BVH over a wavy grid and trace random rays down onto it.
     #[cfg(feature = "embree")]
     Smoke {
@@ -187,13 +194,26 @@ fn ocean(a: OceanArgs) -> Result<()> {
     Ok(())
 }
 
+/// Scene flags shared by `render` and `compare`: a scene file and the settings most often
+/// changed on the command line, which override it.
 #[cfg(feature = "embree")]
 #[derive(clap::Args)]
-#[command(allow_negative_numbers = true)]
-struct RenderArgs {
-    /// Scene file (TOML); command-line flags override it. Without one, the default scene.
+struct SceneFlags {
+    /// Scene file (TOML); the flags below override it. Without one, the default scene.
     #[arg(long)]
     config: Option<std::path::PathBuf>,
+    /// Wind speed at 10 m, m/s.
+    #[arg(long)]
+    wind: Option<f64>,
+    /// Fetch, km.
+    #[arg(long)]
+    fetch: Option<f64>,
+    /// Water depth, m.
+    #[arg(long)]
+    depth: Option<f64>,
+    /// Scale the ocean to this RMS wave height, m.
+    #[arg(long)]
+    rms: Option<f64>,
     /// Equirectangular EXR sky map (instead of the built-in analytic sky).
     #[arg(long)]
     sky: Option<std::path::PathBuf>,
@@ -203,6 +223,60 @@ struct RenderArgs {
     /// Samples per pixel.
     #[arg(long)]
     spp: Option<u32>,
+    /// Sample seed (the ocean's realization is `render.ocean_seed` in the scene file).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Camera height above the sea, m.
+    #[arg(long)]
+    camera_height: Option<f64>,
+    /// Worker threads (0 = all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// The BVH: Debian's Embree or the pure-Rust one.
+    #[arg(long, value_enum)]
+    backend: Option<vastocean::config::Backend>,
+}
+
+#[cfg(feature = "embree")]
+impl SceneFlags {
+    /// The scene file (or the default scene) with the flags applied.
+    fn scene(&self) -> Result<vastocean::config::SceneConfig> {
+        let mut s = match &self.config {
+            Some(path) => {
+                vastocean::config::SceneConfig::load(path).map_err(|e| BadInput(e.to_string()))?
+            }
+            None => vastocean::config::SceneConfig::default(),
+        };
+        let set = |field: &mut f64, v: Option<f64>| {
+            if let Some(v) = v {
+                *field = v;
+            }
+        };
+        set(&mut s.ocean.wind_speed, self.wind);
+        set(&mut s.ocean.fetch_km, self.fetch);
+        set(&mut s.ocean.depth_m, self.depth);
+        set(&mut s.camera.height_m, self.camera_height);
+        if self.rms.is_some() {
+            s.ocean.rms_m = self.rms;
+        }
+        if self.sky.is_some() {
+            s.sky.file = self.sky.clone();
+        }
+        s.camera.width = self.width.unwrap_or(s.camera.width);
+        s.render.spp = self.spp.unwrap_or(s.render.spp);
+        s.render.seed = self.seed.unwrap_or(s.render.seed);
+        s.render.threads = self.threads.unwrap_or(s.render.threads);
+        s.render.backend = self.backend.unwrap_or(s.render.backend);
+        Ok(s)
+    }
+}
+
+#[cfg(feature = "embree")]
+#[derive(clap::Args)]
+#[command(allow_negative_numbers = true)]
+struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneFlags,
     /// Tessellation: the paper's presets, or chosen from the pixel footprint.
     #[arg(long, value_enum)]
     lod: Option<vastocean::config::LodChoice>,
@@ -212,14 +286,6 @@ struct RenderArgs {
     /// Render only the elevations TOP:BOTTOM in degrees, e.g. +1:-6 (equirectangular camera).
     #[arg(long, value_parser = parse_band, allow_hyphen_values = true)]
     band: Option<(f64, f64)>,
-    /// Camera height above the sea, m.
-    #[arg(long)]
-    camera_height: Option<f64>,
-    #[arg(long)]
-    seed: Option<u64>,
-    /// Worker threads (0 = all cores).
-    #[arg(long)]
-    threads: Option<usize>,
     /// Output prefix: writes PREFIX.exr, PREFIX.png and PREFIX.json.
     #[arg(long, default_value = "out/render")]
     out: std::path::PathBuf,
@@ -232,29 +298,8 @@ struct RenderArgs {
 #[derive(clap::Args)]
 #[command(allow_negative_numbers = true)]
 struct CompareArgs {
-    /// Scene file (TOML) with the ocean case, sky, camera and samples; flags override it.
-    #[arg(long)]
-    config: Option<std::path::PathBuf>,
-    /// Wind speed, m/s.
-    #[arg(long)]
-    wind: Option<f64>,
-    /// Fetch, km.
-    #[arg(long)]
-    fetch: Option<f64>,
-    /// Depth, m.
-    #[arg(long)]
-    depth: Option<f64>,
-    /// RMS wave height, m.
-    #[arg(long)]
-    rms: Option<f64>,
-    /// Equirectangular EXR sky map.
-    #[arg(long)]
-    sky: Option<std::path::PathBuf>,
-    /// Full 360 degree image width, pixels.
-    #[arg(long)]
-    width: Option<usize>,
-    #[arg(long)]
-    spp: Option<u32>,
+    #[command(flatten)]
+    scene: SceneFlags,
     /// Rendered elevations TOP:BOTTOM in degrees (default +1:-6).
     #[arg(long, value_parser = parse_band, allow_hyphen_values = true)]
     band: Option<(f64, f64)>,
@@ -267,9 +312,6 @@ struct CompareArgs {
     /// The low tessellation.
     #[arg(long, value_enum, default_value_t = vastocean::config::LodChoice::PaperLow)]
     low: vastocean::config::LodChoice,
-    /// Sample seed (the ocean seed is `render.ocean_seed` in the config).
-    #[arg(long)]
-    seed: Option<u64>,
     /// Output folder.
     #[arg(long)]
     out: std::path::PathBuf,
@@ -281,37 +323,10 @@ struct CompareArgs {
 #[cfg(feature = "embree")]
 fn compare(a: CompareArgs) -> Result<()> {
     use vastocean::analysis::{CompareError, CompareOptions, compare};
-    use vastocean::config::{LodConfig, SceneConfig};
+    use vastocean::config::LodConfig;
     use vastocean::render::Projection;
 
-    let mut scene = match &a.config {
-        Some(path) => SceneConfig::load(path).map_err(|e| BadInput(e.to_string()))?,
-        None => SceneConfig::default(),
-    };
-    for (field, v) in [
-        (&mut scene.ocean.wind_speed, a.wind),
-        (&mut scene.ocean.fetch_km, a.fetch),
-        (&mut scene.ocean.depth_m, a.depth),
-    ] {
-        if let Some(v) = v {
-            *field = v;
-        }
-    }
-    if a.rms.is_some() {
-        scene.ocean.rms_m = a.rms;
-    }
-    if a.sky.is_some() {
-        scene.sky.file = a.sky.clone();
-    }
-    if let Some(w) = a.width {
-        scene.camera.width = w;
-    }
-    if let Some(s) = a.spp {
-        scene.render.spp = s;
-    }
-    if let Some(s) = a.seed {
-        scene.render.seed = s;
-    }
+    let mut scene = a.scene.scene()?;
     let band = match (a.band, scene.camera.projection) {
         (Some(b), _) => b,
         (None, Projection::Equirect { band_deg: Some(b) }) => b,
@@ -372,6 +387,150 @@ fn compare(a: CompareArgs) -> Result<()> {
 }
 
 #[cfg(feature = "embree")]
+#[derive(clap::Args)]
+struct CrosscheckArgs {
+    /// The ocean mesh to trace (the default case-22 ocean, camera 2 m up).
+    #[arg(long, value_enum, default_value_t = vastocean::config::LodChoice::PaperLow)]
+    lod: vastocean::config::LodChoice,
+    /// Random rays aimed into the mesh's bounds (the camera rays of the small render come on top).
+    #[arg(long, default_value_t = 1_000_000)]
+    rays: usize,
+    /// Width of the small 360 degree render whose camera rays are traced too and which is
+    /// rendered with both backends.
+    #[arg(long, default_value_t = 256)]
+    width: usize,
+    /// Samples per pixel of the small render.
+    #[arg(long, default_value_t = 2)]
+    spp: u32,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Worker threads (0 = all cores).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Print one JSON object on stdout instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+#[cfg(feature = "embree")]
+fn crosscheck(a: CrosscheckArgs) -> Result<()> {
+    use std::sync::Arc;
+    use vastocean::accel::Ray;
+    use vastocean::accel::crosscheck::{crosscheck, random_rays_over};
+    use vastocean::config::{Backend, SceneConfig};
+    use vastocean::render::pipeline::render_scene;
+    use vastocean::render::{Camera, Projection};
+
+    let mut cfg = SceneConfig::default();
+    cfg.lod.preset = a.lod;
+    cfg.camera.width = a.width;
+    cfg.render.spp = a.spp;
+    cfg.render.seed = a.seed;
+    cfg.render.threads = a.threads;
+    cfg.validate().map_err(|e| BadInput(e.to_string()))?;
+    let ocean = Surface::new(&cfg.ocean, cfg.render.ocean_seed)?;
+    let (mesh, _) =
+        vastocean::lod::tessellate(&cfg.lod_params()?, &ocean.sampler(cfg.camera.position_m))?;
+    let mut rays = random_rays_over(&mesh, a.rays, a.seed);
+    let camera = Camera::new(Projection::Equirect { band_deg: None }, a.width, 2.0);
+    let eye = [0.0, cfg.camera.height_m as f32, 0.0];
+    for y in 0..camera.height {
+        for x in 0..camera.width {
+            rays.push(Ray::new(
+                eye,
+                camera.direction(x as f32 + 0.5, y as f32 + 0.5).to_array(),
+            ));
+        }
+    }
+    let report = crosscheck(Arc::new(mesh), &rays, a.threads)?;
+
+    // The same small render through each backend, same seed: which pixels differ, and by how much.
+    let mut images = Vec::new();
+    for backend in [Backend::Embree, Backend::Rust] {
+        let mut c = cfg.clone();
+        c.render.backend = backend;
+        images.push(render_scene(&c, false)?.image);
+    }
+    let lum = vastocean::analysis::luminance;
+    let pairs = images[0].pixels.iter().zip(&images[1].pixels);
+    let differing = pairs
+        .clone()
+        .filter(|(p, q)| p.map(f32::to_bits) != q.map(f32::to_bits))
+        .count();
+    let max_diff = pairs
+        .clone()
+        .map(|(p, q)| (lum(*p) - lum(*q)).abs())
+        .fold(0f32, f32::max);
+    let mean_abs_diff = pairs
+        .map(|(p, q)| (lum(*p) - lum(*q)).abs() as f64)
+        .sum::<f64>()
+        / images[0].pixels.len() as f64;
+    let mean_lum = images[0].pixels.iter().map(|p| lum(*p) as f64).sum::<f64>()
+        / images[0].pixels.len() as f64;
+    let pixels = images[0].pixels.len();
+
+    if a.json {
+        let mut v = serde_json::to_value(&report)?;
+        v["camera_rays"] = serde_json::json!(camera.width * camera.height);
+        v["render_pixels"] = serde_json::json!(pixels);
+        v["render_differing_fraction"] = serde_json::json!(differing as f64 / pixels as f64);
+        v["render_max_luminance_difference"] = serde_json::json!(max_diff);
+        v["render_mean_luminance"] = serde_json::json!(mean_lum);
+        v["render_mean_abs_luminance_difference"] = serde_json::json!(mean_abs_diff);
+        println!("{}", serde_json::to_string_pretty(&v)?);
+        return Ok(());
+    }
+    println!(
+        "crosscheck on {:?} ({} rays, {} of them camera rays):",
+        a.lod,
+        report.rays,
+        camera.width * camera.height
+    );
+    println!(
+        "  agree {:.6} (same triangle {}, both miss {}), disagreements {}: {} explained (edge/vertex or tie), {} unexplained",
+        report.agree_fraction,
+        report.same_prim,
+        report.both_miss,
+        report.disagreements,
+        report.explained_disagreements,
+        report.unexplained_disagreements
+    );
+    println!(
+        "  max relative t difference on agreeing hits {:.2e}",
+        report.max_rel_dt
+    );
+    println!(
+        "  build: Embree {:.3} s, Rust {:.3} s; trace: Embree {:.2} Mrays/s, Rust {:.2} Mrays/s",
+        report.embree_build_s,
+        report.rust_build_s,
+        report.embree_mrays_per_s,
+        report.rust_mrays_per_s
+    );
+    println!(
+        "  render {} x {} at {} spp with each backend: {} of {} pixels differ ({:.4}%), mean absolute luminance difference {:.3e}, largest {:.3e} (mean luminance {:.3e})",
+        camera.width,
+        camera.height,
+        a.spp,
+        differing,
+        pixels,
+        100.0 * differing as f64 / pixels as f64,
+        mean_abs_diff,
+        max_diff,
+        mean_lum
+    );
+    println!(
+        "  (rays that agree up to rounding can still flip a Fresnel-weighted random branch or graze a sun glint, so single pixels of a few-sample render may differ a lot)"
+    );
+    if report.unexplained_disagreements > 0 {
+        anyhow::bail!(
+            "{} unexplained disagreements between Embree and the Rust BVH",
+            report.unexplained_disagreements
+        );
+    }
+    Ok(())
+}
+
+#[cfg(feature = "embree")]
 fn parse_band(s: &str) -> Result<(f64, f64), String> {
     let (a, b) = s
         .split_once(':')
@@ -387,23 +546,10 @@ fn parse_band(s: &str) -> Result<(f64, f64), String> {
 
 #[cfg(feature = "embree")]
 fn render(a: RenderArgs) -> Result<()> {
-    use vastocean::config::SceneConfig;
     use vastocean::render::Projection;
     use vastocean::render::pipeline::{RenderError, render_scene, write_outputs};
 
-    let mut cfg = match &a.config {
-        Some(path) => SceneConfig::load(path).map_err(|e| BadInput(e.to_string()))?,
-        None => SceneConfig::default(),
-    };
-    if a.sky.is_some() {
-        cfg.sky.file = a.sky.clone();
-    }
-    if let Some(w) = a.width {
-        cfg.camera.width = w;
-    }
-    if let Some(s) = a.spp {
-        cfg.render.spp = s;
-    }
+    let mut cfg = a.scene.scene()?;
     if let Some(l) = a.lod {
         cfg.lod.preset = l;
     }
@@ -420,15 +566,6 @@ fn render(a: RenderArgs) -> Result<()> {
             }
         };
     }
-    if let Some(h) = a.camera_height {
-        cfg.camera.height_m = h;
-    }
-    if let Some(s) = a.seed {
-        cfg.render.seed = s;
-    }
-    if let Some(t) = a.threads {
-        cfg.render.threads = t;
-    }
     cfg.validate().map_err(|e| BadInput(e.to_string()))?;
     let mut r = render_scene(&cfg, true).map_err(|e| match e {
         // A sky file that is missing or not a sky map is bad input, not a crash.
@@ -441,12 +578,14 @@ fn render(a: RenderArgs) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(rep)?);
     } else {
         println!(
-            "rendered {} x {} at {} spp: {} triangles (Embree {}), {:.1} M rays at {:.2} Mrays/s",
+            "rendered {} x {} at {} spp: {} triangles ({}), {:.1} M rays at {:.2} Mrays/s",
             rep.width,
             rep.height,
             rep.spp,
             rep.triangles,
-            rep.embree_version,
+            rep.embree_version
+                .as_deref()
+                .map_or_else(|| "Rust BVH".to_string(), |v| format!("Embree {v}")),
             rep.rays as f64 / 1e6,
             rep.mrays_per_s
         );
@@ -587,6 +726,171 @@ fn mesh(a: MeshArgs) -> Result<()> {
     Ok(())
 }
 
+#[derive(clap::Args)]
+struct SkyArgs {
+    #[command(subcommand)]
+    command: SkyCommand,
+}
+
+#[derive(Subcommand)]
+enum SkyCommand {
+    /// Generate a sky map (half-float EXR).
+    Generate(SkyGenerateArgs),
+    /// Import an equirectangular HDR photograph: remove the ground, optionally rotate the sun.
+    Import(SkyImportArgs),
+    /// Resolution, mean and peak luminance, sun direction, energy near the horizon.
+    Info {
+        /// Equirectangular EXR sky map.
+        file: std::path::PathBuf,
+        /// Print one JSON object on stdout instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// A tone-mapped PNG contact sheet of sky maps, in the order given.
+    Sheet {
+        /// Equirectangular EXR sky maps.
+        #[arg(required = true)]
+        files: Vec<std::path::PathBuf>,
+        /// Width of each thumbnail, pixels.
+        #[arg(long, default_value_t = 384)]
+        thumb_width: usize,
+        /// Thumbnails per row.
+        #[arg(long, default_value_t = 3)]
+        columns: usize,
+        #[arg(long)]
+        out: std::path::PathBuf,
+    },
+}
+
+#[derive(clap::Args)]
+#[command(allow_negative_numbers = true)]
+struct SkyGenerateArgs {
+    #[arg(long, value_enum)]
+    kind: vastocean::render::sky_gen::SkyKind,
+    /// Sun elevation above the horizon, degrees (0..=90; sets the overcast sky's brightness).
+    #[arg(long)]
+    sun_elevation: f64,
+    /// Sun azimuth, degrees (0 = +x, 90 = +z).
+    #[arg(long, default_value_t = 180.0)]
+    sun_azimuth: f64,
+    /// Atmospheric turbidity (Preetham: 2 very clear, 6 hazy).
+    #[arg(long, default_value_t = 2.5)]
+    turbidity: f64,
+    /// Covered fraction of the cloud layer (partly cloudy).
+    #[arg(long, default_value_t = 0.4)]
+    cloud_cover: f64,
+    /// Seed of the clouds (partly cloudy).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Map width, texels (height = width / 2).
+    #[arg(long, default_value_t = 1024)]
+    width: usize,
+    #[arg(long)]
+    out: std::path::PathBuf,
+}
+
+#[derive(clap::Args)]
+#[command(allow_negative_numbers = true)]
+struct SkyImportArgs {
+    /// Equirectangular HDR photograph (EXR, horizon at the middle row).
+    photo: std::path::PathBuf,
+    #[arg(long)]
+    out: std::path::PathBuf,
+    /// What to put below the horizon.
+    #[arg(long, value_enum, default_value_t = vastocean::render::sky_tools::Ground::Fill)]
+    ground: vastocean::render::sky_tools::Ground,
+    /// Rotate the map in azimuth so the brightest region (the sun) lands here, degrees.
+    #[arg(long)]
+    sun_azimuth: Option<f64>,
+    /// Set negative components (left by colour-space conversions) to zero instead of refusing.
+    #[arg(long)]
+    clamp_negative: bool,
+}
+
+fn sky(a: SkyArgs) -> Result<()> {
+    use vastocean::image_io::{read_exr, write_exr_half, write_png_rgb8};
+    use vastocean::render::{sky::validate_map, sky_gen, sky_tools};
+    let load = |path: &std::path::Path| -> Result<vastocean::image_io::RgbImage> {
+        let img = read_exr(path).map_err(|e| BadInput(e.to_string()))?;
+        validate_map(path, &img).map_err(|e| BadInput(e.to_string()))?;
+        Ok(img)
+    };
+    match a.command {
+        SkyCommand::Generate(g) => {
+            let params = sky_gen::SkyParams {
+                kind: g.kind,
+                sun_elevation_deg: g.sun_elevation,
+                sun_azimuth_deg: g.sun_azimuth,
+                turbidity: g.turbidity,
+                cloud_cover: g.cloud_cover,
+                seed: g.seed,
+            };
+            let img = sky_gen::generate(&params, g.width).map_err(|e| BadInput(e.to_string()))?;
+            write_exr_half(&g.out, &img)?;
+            eprintln!("wrote {} ({} x {})", g.out.display(), img.width, img.height);
+        }
+        SkyCommand::Import(i) => {
+            let mut img = read_exr(&i.photo).map_err(|e| BadInput(e.to_string()))?;
+            if i.clamp_negative {
+                let (n, worst) = sky_tools::clamp_negative(&mut img);
+                if n > 0 {
+                    eprintln!(
+                        "{}: set {n} negative components (down to {worst:e}) to zero",
+                        i.photo.display()
+                    );
+                }
+            }
+            validate_map(&i.photo, &img).map_err(|e| BadInput(e.to_string()))?;
+            if let Some(az) = i.sun_azimuth {
+                if !az.is_finite() {
+                    return Err(BadInput(format!("--sun-azimuth {az} is not finite")).into());
+                }
+                let r = sky_tools::rotate_sun_to(&mut img, az);
+                eprintln!("rotated {} by {r:.2} degrees in azimuth", i.photo.display());
+            }
+            sky_tools::remove_ground(&mut img, i.ground);
+            write_exr_half(&i.out, &img)?;
+            eprintln!("wrote {} ({} x {})", i.out.display(), img.width, img.height);
+        }
+        SkyCommand::Info { file, json } => {
+            let s = sky_tools::info(&load(&file)?);
+            if json {
+                println!("{}", serde_json::to_string_pretty(&s)?);
+            } else {
+                println!("{}: {} x {}", file.display(), s.width, s.height);
+                println!("  mean luminance          {:.6}", s.mean_radiance);
+                println!("  peak luminance          {:.6}", s.peak_radiance);
+                println!(
+                    "  sun (brightest region)  elevation {:.2} deg, azimuth {:.2} deg",
+                    s.sun_elevation_deg, s.sun_azimuth_deg
+                );
+                println!(
+                    "  energy within 5 deg of the horizon  {:.4}",
+                    s.horizon_energy_fraction
+                );
+            }
+        }
+        SkyCommand::Sheet {
+            files,
+            thumb_width,
+            columns,
+            out,
+        } => {
+            if thumb_width < 2 || !thumb_width.is_multiple_of(2) || columns == 0 {
+                return Err(BadInput(format!(
+                    "--thumb-width must be even and >= 2 and --columns >= 1 (got {thumb_width}, {columns})"
+                ))
+                .into());
+            }
+            let maps = files.iter().map(|f| load(f)).collect::<Result<Vec<_>>>()?;
+            let (w, h, rgb) = sky_tools::contact_sheet(&maps, thumb_width, columns);
+            write_png_rgb8(&out, w, h, &rgb)?;
+            eprintln!("wrote {} ({w} x {h})", out.display());
+        }
+    }
+    Ok(())
+}
+
 /// Errors in what the user gave us (exit code 2), as opposed to failures while running.
 #[derive(Debug, thiserror::Error)]
 #[error("{0}")]
@@ -645,6 +949,9 @@ fn run(cli: Cli) -> Result<()> {
         Command::Info { threads, json } => info(threads, json),
         Command::Ocean(a) => ocean(a),
         Command::Mesh(a) => mesh(a),
+        #[cfg(feature = "embree")]
+        Command::Crosscheck(a) => crosscheck(a),
+        Command::Sky(a) => sky(a),
         #[cfg(feature = "embree")]
         Command::Compare(a) => compare(a),
         #[cfg(feature = "embree")]

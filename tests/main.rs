@@ -7,3 +7,4 @@ mod embree;
 mod lod;
 #[cfg(feature = "embree")]
 mod render;
+mod sky;

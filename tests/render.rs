@@ -107,15 +107,18 @@ fn white_furnace_every_pixel_equals_the_sky() {
     let l = [0.5f32, 0.7, 1.0];
     let sky = Sky::analytic(AnalyticSky::Uniform { radiance: l });
     let scene = scene_ref(&accel, sampler, 6_371_000.0, &sky);
+    // R_rs = 1/pi under a uniform sky of irradiance pi L gives a water-leaving radiance of L.
     let water = Water {
         absorption: [0.0; 3],
-        upwelling: l,
+        upwelling_rrs: [std::f32::consts::FRAC_1_PI; 3],
         ..Water::default()
     };
+    let upwelling = water.upwelling(sky.irradiance()).to_array();
     for normals in [NormalMode::Vertex, NormalMode::Mapped] {
         let settings = TraceSettings {
             normals,
             water,
+            upwelling,
             ..TraceSettings::default()
         };
         let (img, c) = render_image(&scene, &equirect(64, None), 2.0, 4, 1, &settings, false);
@@ -151,6 +154,7 @@ fn flat_sea_matches_the_fresnel_weighted_mirror_lookup() {
     let water = Water::default();
     let settings = TraceSettings {
         water,
+        upwelling: water.upwelling(sky.irradiance()).to_array(),
         ..TraceSettings::default()
     };
     let cam = equirect(128, Some((-2.0, -60.0)));
@@ -169,7 +173,7 @@ fn flat_sea_matches_the_fresnel_weighted_mirror_lookup() {
                     );
                     let f = fresnel(-d.y, 1.0, water.ior);
                     sum += f * sky_at(Vec3::new(d.x, -d.y, d.z))
-                        + (1.0 - f) * Vec3::from(water.upwelling);
+                        + (1.0 - f) * Vec3::from(settings.upwelling);
                 }
             }
             let want = sum / 256.0;

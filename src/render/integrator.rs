@@ -44,15 +44,24 @@ pub struct TraceSettings {
     /// Hits up to this depth branch into both reflection and refraction; deeper ones choose one.
     pub branch_depth: u32,
     pub water: Water,
+    /// Radiance a downward ray that never meets the surface again returns: the water's R_rs
+    /// times the sky's irradiance (see [`Water::upwelling`]), resolved once per render.
+    pub upwelling: [f32; 3],
 }
 
 impl Default for TraceSettings {
     fn default() -> Self {
+        let water = Water::default();
+        // The built-in default sky's irradiance is about pi (a sky of radiance ~1).
+        let upwelling = water
+            .upwelling(Vec3::splat(std::f32::consts::PI))
+            .to_array();
         TraceSettings {
             normals: NormalMode::Mapped,
             max_segments: 10,
             branch_depth: 3,
-            water: Water::default(),
+            water,
+            upwelling,
         }
     }
 }
@@ -262,12 +271,12 @@ impl SceneRef<'_> {
             && -d.y > slope * (d.x * d.x + d.z * d.z).sqrt()
         {
             c.skipped += 1;
-            return Vec3::from(settings.water.upwelling);
+            return Vec3::from(settings.upwelling);
         }
         c.rays += 1;
         let Some(hit) = self.accel.intersect(ray) else {
             return if in_water {
-                Vec3::from(settings.water.upwelling)
+                Vec3::from(settings.upwelling)
             } else {
                 self.sky.radiance(Vec3::from(ray.org), d)
             };

@@ -7,6 +7,8 @@ pub mod integrator;
 #[cfg(feature = "embree")]
 pub mod pipeline;
 pub mod sky;
+pub mod sky_gen;
+pub mod sky_tools;
 pub mod water;
 
 pub use camera::{Camera, Projection};

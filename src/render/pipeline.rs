@@ -13,9 +13,11 @@ use thiserror::Error;
 use super::integrator::max_descent_slope;
 use super::{Camera, Counters, SceneRef, Sky, render_image};
 use crate::accel::Accel;
+use crate::accel::bvh::Bvh;
 use crate::accel::embree::{
     BuildOptions, Device, EmbreeError, Scene, flush_denormals_on_this_thread,
 };
+use crate::config::Backend;
 use crate::config::{ConfigError, SceneConfig};
 use crate::image_io::{ImageError, RgbImage, auto_exposure, write_exr, write_json, write_png};
 use crate::lod::{LodError, LodParams, LodStats, tessellate};
@@ -45,7 +47,9 @@ pub struct RenderReport {
     pub spp: u32,
     pub seed: u64,
     pub threads: usize,
-    pub embree_version: String,
+    /// "embree" or "rust".
+    pub backend: String,
+    pub embree_version: Option<String>,
     pub triangles: usize,
     pub vertices: usize,
     pub rings: usize,
@@ -71,6 +75,9 @@ pub struct RenderReport {
     /// Steepest descent slope of the mesh; rays in the water steeper than it are not traced.
     pub skip_slope: Option<f32>,
     pub skipped_rays: u64,
+    /// Downwelling irradiance of the sky and the water-leaving radiance it gives (R_rs x E_d).
+    pub sky_irradiance: [f32; 3],
+    pub upwelling: [f32; 3],
     pub counters: Counters,
     pub exr: PathBuf,
     pub png: PathBuf,
@@ -104,9 +111,15 @@ pub fn make_sky(cfg: &SceneConfig) -> Result<Sky, RenderError> {
 pub struct Prepared {
     pub ocean: Surface,
     pub lod: LodParams,
-    pub scene: Scene,
+    /// The BVH the scene asked for (`render.backend`).
+    pub accel: Box<dyn Accel>,
+    pub seconds_build: f64,
+    /// Embree's version when the Embree backend traces.
+    pub embree_version: Option<String>,
     pub sky: Sky,
     pub skip_slope: Option<f32>,
+    /// The sky's downwelling irradiance, which sets the water-leaving radiance.
+    pub sky_irradiance: glam::Vec3,
     pub stats: LodStats,
     pub seconds_ocean: f64,
     pub seconds_tessellation: f64,
@@ -139,14 +152,31 @@ pub fn prepare(cfg: &SceneConfig) -> Result<Prepared, RenderError> {
             Ok((ocean, seconds_ocean, mesh, stats, t.elapsed().as_secs_f64()))
         })?;
     let skip_slope = max_descent_slope(&mesh);
-    let device = Device::new(threads)?;
-    let scene = Scene::new(&device, Arc::new(mesh), BuildOptions::default())?;
+    let mesh = Arc::new(mesh);
+    let (accel, seconds_build, embree_version): (Box<dyn Accel>, f64, Option<String>) =
+        match cfg.render.backend {
+            Backend::Embree => {
+                let device = Device::new(threads)?;
+                let scene = Scene::new(&device, mesh, BuildOptions::default())?;
+                let s = scene.build_seconds();
+                (Box::new(scene), s, Some(device.version()))
+            }
+            Backend::Rust => {
+                let bvh = pool.install(|| Bvh::build(mesh));
+                let s = bvh.build_seconds();
+                (Box::new(bvh), s, None)
+            }
+        };
+    let sky_irradiance = sky.irradiance();
     Ok(Prepared {
         ocean,
         lod,
-        scene,
+        accel,
+        seconds_build,
+        embree_version,
         sky,
         skip_slope,
+        sky_irradiance,
         stats,
         seconds_ocean,
         seconds_tessellation,
@@ -165,7 +195,7 @@ impl Prepared {
         let camera = Camera::new(cfg.camera.projection, cfg.camera.width, cfg.camera.aspect);
         let sampler = self.ocean.sampler(self.camera_position_m);
         let scene_ref = SceneRef {
-            accel: &self.scene,
+            accel: self.accel.as_ref(),
             skip_slope: self.skip_slope,
             ocean: Some(sampler),
             earth_radius_m: self.lod.earth_radius_m,
@@ -179,21 +209,22 @@ impl Prepared {
                 cfg.camera.height_m as f32,
                 cfg.render.spp,
                 cfg.render.seed,
-                &cfg.trace_settings(),
+                &cfg.trace_settings(self.sky_irradiance),
                 progress,
             )
         });
         let seconds_trace = t.elapsed().as_secs_f64();
         let seconds_normal_map = c.normal_map_thread_seconds() / self.threads as f64;
-        let mesh = self.scene.mesh();
-        let seconds_build = self.scene.build_seconds();
+        let mesh = self.accel.mesh();
+        let seconds_build = self.seconds_build;
         let report = RenderReport {
             width: camera.width,
             height: camera.height,
             spp: cfg.render.spp,
             seed: cfg.render.seed,
             threads: self.threads,
-            embree_version: self.scene.device_version(),
+            backend: self.accel.name().to_string(),
+            embree_version: self.embree_version.clone(),
             triangles: mesh.triangle_count(),
             vertices: mesh.vertex_count(),
             rings: self.stats.rings,
@@ -217,6 +248,8 @@ impl Prepared {
             truncated_paths: c.truncated,
             skip_slope: self.skip_slope,
             skipped_rays: c.skipped,
+            sky_irradiance: self.sky_irradiance.to_array(),
+            upwelling: cfg.water.upwelling(self.sky_irradiance).to_array(),
             counters: c,
             exr: PathBuf::new(),
             png: PathBuf::new(),

@@ -134,6 +134,21 @@ impl Sky {
             }
     }
 
+    /// Downwelling irradiance on a horizontal surface: the radiance of the upper hemisphere
+    /// weighted by the cosine to the zenith, per channel (the dome's parallax is ignored). Exact
+    /// for a map (summed over its texels); an analytic sky is first sampled on a 1024 x 512 map.
+    pub fn irradiance(&self) -> Vec3 {
+        let raster;
+        let img = match &self.source {
+            SkySource::Map(m) => m,
+            SkySource::Analytic(a) => {
+                raster = rasterize(a, 1024);
+                &raster
+            }
+        };
+        self.scale * map_irradiance(img)
+    }
+
     /// Direction from the camera to where the ray meets the dome: a sphere about the earth's
     /// centre `altitude` above the sea. f64, because the earth's radius leaves f32 a metre of
     /// precision.
@@ -151,6 +166,47 @@ impl Sky {
         let cam = DVec3::new(0.0, self.camera_height_m + r, 0.0);
         (q - cam).normalize().as_vec3()
     }
+}
+
+/// Samples an analytic sky at the texel centres of a `width` x `width / 2` equirectangular map.
+pub fn rasterize(sky: &AnalyticSky, width: usize) -> RgbImage {
+    let mut img = RgbImage::new(width, width / 2);
+    for y in 0..img.height {
+        let el = std::f32::consts::FRAC_PI_2
+            - std::f32::consts::PI * (y as f32 + 0.5) / img.height as f32;
+        for x in 0..width {
+            let az = std::f32::consts::TAU * (x as f32 + 0.5) / width as f32;
+            img.pixels[y * width + x] = sky
+                .radiance(Vec3::new(
+                    el.cos() * az.cos(),
+                    el.sin(),
+                    el.cos() * az.sin(),
+                ))
+                .to_array();
+        }
+    }
+    img
+}
+
+/// Cosine-weighted integral of an equirectangular map over the upper hemisphere: each texel
+/// contributes L sin(elevation) times its solid angle cos(elevation) dphi dtheta.
+pub fn map_irradiance(img: &RgbImage) -> Vec3 {
+    let (dphi, dtheta) = (
+        std::f64::consts::TAU / img.width as f64,
+        std::f64::consts::PI / img.height as f64,
+    );
+    let mut e = [0f64; 3];
+    for y in 0..img.height / 2 {
+        let el = std::f64::consts::FRAC_PI_2 - (y as f64 + 0.5) * dtheta;
+        let w = el.sin() * el.cos() * dphi * dtheta;
+        for x in 0..img.width {
+            let p = img.get(x, y);
+            for k in 0..3 {
+                e[k] += p[k] as f64 * w;
+            }
+        }
+    }
+    Vec3::new(e[0] as f32, e[1] as f32, e[2] as f32)
 }
 
 /// Checks that an image can serve as an equirectangular sky map.
@@ -258,6 +314,26 @@ mod tests {
                 && at(-1.1 * SUN_RADIUS_RAD) < 0.01 * sun_radiance
         );
         assert!((2.0 * SUN_RADIUS_RAD.to_degrees() - 0.53).abs() < 0.001);
+    }
+
+    #[test]
+    fn irradiance_of_a_uniform_sky_is_pi_times_its_radiance() {
+        let sky = Sky::analytic(AnalyticSky::Uniform {
+            radiance: [0.5, 1.0, 2.0],
+        });
+        let e = sky.irradiance();
+        for (got, l) in e.to_array().into_iter().zip([0.5f32, 1.0, 2.0]) {
+            assert!(
+                (got / (std::f32::consts::PI * l) - 1.0).abs() < 1e-4,
+                "{got}"
+            );
+        }
+        // A sky bright only below the horizon gives no irradiance.
+        let mut img = RgbImage::new(64, 32);
+        for p in &mut img.pixels[16 * 64..] {
+            *p = [1.0; 3];
+        }
+        assert_eq!(map_irradiance(&img), Vec3::ZERO);
     }
 
     #[test]

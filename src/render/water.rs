@@ -15,21 +15,22 @@ pub struct Water {
     pub ior: f32,
     /// Absorption coefficients, 1/m, per linear RGB channel.
     pub absorption: [f32; 3],
-    /// Water-leaving radiance of the water body, per channel: what a downward ray that never
-    /// meets the surface again returns. It is taken as seen from the air side, so the n^2
-    /// radiance scaling at the interface is already in it (paths that cross air -> water -> air
-    /// are unaffected: their two scalings cancel).
-    pub upwelling: [f32; 3],
+    /// Remote-sensing reflectance R_rs = L_w / E_d, 1/sr, per channel: the water-leaving
+    /// radiance L_w per unit downwelling irradiance E_d. What a downward ray that never meets
+    /// the surface again returns is R_rs times the sky's irradiance ([`Water::upwelling`]), so
+    /// the sea's body colour keeps its proportion to any sky, in any units.
+    pub upwelling_rrs: [f32; 3],
 }
 
 impl Default for Water {
     fn default() -> Self {
-        // Pure-water absorption at ~600/550/450 nm (Pope & Fry 1997), and a deep-ocean body
-        // colour small against the sky, as measured water-leaving radiance is.
+        // Pure-water absorption at ~600/550/450 nm (Pope & Fry 1997); R_rs of clear open ocean
+        // in the red, green and blue (about 0.0003, 0.002, 0.008 1/sr; cf. Morel & Maritorena
+        // 2001).
         Water {
             ior: 1.333,
             absorption: [0.25, 0.07, 0.02],
-            upwelling: [0.004, 0.012, 0.02],
+            upwelling_rrs: [0.0003, 0.002, 0.008],
         }
     }
 }
@@ -69,6 +70,13 @@ pub fn refract(d: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
 }
 
 impl Water {
+    /// Water-leaving radiance under a sky of downwelling irradiance `irradiance` (the air-side
+    /// value, so the n^2 radiance scaling at the interface is already in it; paths that cross
+    /// air -> water -> air are unaffected, their two scalings cancel).
+    pub fn upwelling(&self, irradiance: Vec3) -> Vec3 {
+        Vec3::from(self.upwelling_rrs) * irradiance
+    }
+
     /// Beer-Lambert transmittance over `distance` metres of water.
     pub fn transmittance(&self, distance: f32) -> Vec3 {
         Vec3::from(self.absorption.map(|a| (-a * distance.max(0.0)).exp()))
