@@ -6,12 +6,9 @@
 //! baseline again with other sample seeds) and writes the renders, `stats.csv`, the plots and
 //! `summary.json`.
 
-#[cfg(feature = "embree")]
 mod compare;
-#[cfg(feature = "embree")]
 mod plot;
 
-#[cfg(feature = "embree")]
 pub use compare::{CompareError, CompareOptions, CompareSummary, SCENARIOS, ScenarioInfo, compare};
 
 use serde::Serialize;

@@ -127,15 +127,24 @@ impl Default for SkyConfig {
     }
 }
 
-/// Which BVH traces the scene.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum, Default)]
+/// Which BVH traces the scene: Embree when this build has it, else the Rust BVH.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Backend {
     /// Debian's Embree through the C shim.
-    #[default]
     Embree,
     /// The pure-Rust BVH (src/accel/bvh.rs).
     Rust,
+}
+
+impl Default for Backend {
+    fn default() -> Self {
+        if cfg!(feature = "embree") {
+            Backend::Embree
+        } else {
+            Backend::Rust
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -166,7 +175,7 @@ impl Default for RenderConfig {
             normals: t.normals,
             max_segments: t.max_segments,
             branch_depth: t.branch_depth,
-            backend: Backend::Embree,
+            backend: Backend::default(),
         }
     }
 }

@@ -32,12 +32,10 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Render a scene: ocean -> LOD tessellation -> Embree BVH -> path tracing -> EXR + PNG + JSON.
-    #[cfg(feature = "embree")]
+    /// Render a scene: ocean -> LOD tessellation -> BVH (Embree or Rust) -> path tracing -> EXR + PNG + JSON.
     Render(RenderArgs),
     /// The paper's four scenarios (high/low tessellation x with/without normal mapping) and the
     /// near-horizon statistics against the baseline.
-    #[cfg(feature = "embree")]
     Compare(CompareArgs),
     /// Trace the same rays through Embree and the pure-Rust BVH and report where they disagree;
     /// also render a small scene with both.
@@ -196,7 +194,6 @@ fn ocean(a: OceanArgs) -> Result<()> {
 
 /// Scene flags shared by `render` and `compare`: a scene file and the settings most often
 /// changed on the command line, which override it.
-#[cfg(feature = "embree")]
 #[derive(clap::Args)]
 struct SceneFlags {
     /// Scene file (TOML); the flags below override it. Without one, the default scene.
@@ -237,7 +234,6 @@ struct SceneFlags {
     backend: Option<vastocean::config::Backend>,
 }
 
-#[cfg(feature = "embree")]
 impl SceneFlags {
     /// The scene file (or the default scene) with the flags applied.
     fn scene(&self) -> Result<vastocean::config::SceneConfig> {
@@ -271,7 +267,6 @@ impl SceneFlags {
     }
 }
 
-#[cfg(feature = "embree")]
 #[derive(clap::Args)]
 #[command(allow_negative_numbers = true)]
 struct RenderArgs {
@@ -294,7 +289,6 @@ struct RenderArgs {
     json: bool,
 }
 
-#[cfg(feature = "embree")]
 #[derive(clap::Args)]
 #[command(allow_negative_numbers = true)]
 struct CompareArgs {
@@ -320,7 +314,6 @@ struct CompareArgs {
     json: bool,
 }
 
-#[cfg(feature = "embree")]
 fn compare(a: CompareArgs) -> Result<()> {
     use vastocean::analysis::{CompareError, CompareOptions, compare};
     use vastocean::config::LodConfig;
@@ -530,7 +523,6 @@ fn crosscheck(a: CrosscheckArgs) -> Result<()> {
     Ok(())
 }
 
-#[cfg(feature = "embree")]
 fn parse_band(s: &str) -> Result<(f64, f64), String> {
     let (a, b) = s
         .split_once(':')
@@ -544,7 +536,6 @@ fn parse_band(s: &str) -> Result<(f64, f64), String> {
     Ok((num(a)?, num(b)?))
 }
 
-#[cfg(feature = "embree")]
 fn render(a: RenderArgs) -> Result<()> {
     use vastocean::render::Projection;
     use vastocean::render::pipeline::{RenderError, render_scene, write_outputs};
@@ -570,6 +561,7 @@ fn render(a: RenderArgs) -> Result<()> {
     let mut r = render_scene(&cfg, true).map_err(|e| match e {
         // A sky file that is missing or not a sky map is bad input, not a crash.
         RenderError::Image(e) => anyhow::Error::new(BadInput(e.to_string())),
+        RenderError::NoEmbree => anyhow::Error::new(BadInput(RenderError::NoEmbree.to_string())),
         e => e.into(),
     })?;
     write_outputs(&mut r, &a.out)?;
@@ -912,6 +904,7 @@ fn info(threads: usize, json: bool) -> Result<()> {
         backends: vec![
             #[cfg(feature = "embree")]
             "embree",
+            "rust",
             "brute",
         ],
         #[cfg(feature = "embree")]
@@ -952,9 +945,7 @@ fn run(cli: Cli) -> Result<()> {
         #[cfg(feature = "embree")]
         Command::Crosscheck(a) => crosscheck(a),
         Command::Sky(a) => sky(a),
-        #[cfg(feature = "embree")]
         Command::Compare(a) => compare(a),
-        #[cfg(feature = "embree")]
         Command::Render(a) => render(a),
         #[cfg(feature = "embree")]
         Command::Smoke {

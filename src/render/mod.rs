@@ -4,7 +4,6 @@
 pub mod camera;
 pub mod film;
 pub mod integrator;
-#[cfg(feature = "embree")]
 pub mod pipeline;
 pub mod sky;
 pub mod sky_gen;

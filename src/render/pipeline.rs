@@ -14,6 +14,7 @@ use super::integrator::max_descent_slope;
 use super::{Camera, Counters, SceneRef, Sky, render_image};
 use crate::accel::Accel;
 use crate::accel::bvh::Bvh;
+#[cfg(feature = "embree")]
 use crate::accel::embree::{
     BuildOptions, Device, EmbreeError, Scene, flush_denormals_on_this_thread,
 };
@@ -32,7 +33,12 @@ pub enum RenderError {
     #[error(transparent)]
     Lod(#[from] LodError),
     #[error(transparent)]
+    #[cfg(feature = "embree")]
     Embree(#[from] EmbreeError),
+    #[error(
+        "this build has no Embree (built without the `embree` feature): use render.backend = \"rust\" (--backend rust)"
+    )]
+    NoEmbree,
     #[error(transparent)]
     Image(#[from] ImageError),
     #[error("cannot start the worker threads: {0}")]
@@ -138,7 +144,11 @@ pub fn prepare(cfg: &SceneConfig) -> Result<Prepared, RenderError> {
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
-        .start_handler(|_| flush_denormals_on_this_thread())
+        .start_handler(|_| {
+            // Embree asks every tracing thread for FTZ/DAZ; the Rust BVH does not need it.
+            #[cfg(feature = "embree")]
+            flush_denormals_on_this_thread()
+        })
         .build()?;
     let sky = make_sky(cfg)?;
     let lod = cfg.lod_params()?;
@@ -155,6 +165,9 @@ pub fn prepare(cfg: &SceneConfig) -> Result<Prepared, RenderError> {
     let mesh = Arc::new(mesh);
     let (accel, seconds_build, embree_version): (Box<dyn Accel>, f64, Option<String>) =
         match cfg.render.backend {
+            #[cfg(not(feature = "embree"))]
+            Backend::Embree => return Err(RenderError::NoEmbree),
+            #[cfg(feature = "embree")]
             Backend::Embree => {
                 let device = Device::new(threads)?;
                 let scene = Scene::new(&device, mesh, BuildOptions::default())?;
@@ -285,4 +298,35 @@ pub fn write_outputs(r: &mut Rendered, prefix: &Path) -> Result<(), RenderError>
     r.report.json = json.clone();
     write_json(&json, &r.report)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_rust_backend_renders_the_default_scene_with_or_without_embree() {
+        let mut cfg = SceneConfig::default();
+        cfg.camera.width = 64;
+        cfg.render.spp = 1;
+        cfg.render.threads = 2;
+        cfg.render.backend = Backend::Rust;
+        let r = render_scene(&cfg, false).unwrap();
+        assert_eq!(r.report.backend, "rust");
+        assert!(r.report.triangles > 1000 && r.report.rays > 0 && r.report.nan_count == 0);
+        assert!(
+            r.image
+                .pixels
+                .iter()
+                .all(|p| p.iter().all(|c| c.is_finite() && *c >= 0.0))
+        );
+        let mut embree = cfg.clone();
+        embree.render.backend = Backend::Embree;
+        let e = render_scene(&embree, false);
+        if cfg!(feature = "embree") {
+            assert_eq!(e.unwrap().report.triangles, r.report.triangles);
+        } else {
+            assert!(matches!(e, Err(RenderError::NoEmbree)));
+        }
+    }
 }
