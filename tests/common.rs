@@ -35,30 +35,6 @@ pub fn random_rays(n: usize, seed: u64) -> Vec<Ray> {
         .collect()
 }
 
-/// Barycentrics (u, v) where the ray's line meets the triangle's plane, inside or not; `None`
-/// when the line is parallel to the plane.
-pub fn line_barycentrics(ray: &Ray, tri: [[f32; 3]; 3]) -> Option<(f64, f64)> {
-    let f = |a: [f32; 3]| [a[0] as f64, a[1] as f64, a[2] as f64];
-    let (o, d, p0, p1, p2) = (f(ray.org), f(ray.dir), f(tri[0]), f(tri[1]), f(tri[2]));
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let cross = |a: [f64; 3], b: [f64; 3]| {
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
-    };
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let (e1, e2) = (sub(p1, p0), sub(p2, p0));
-    let pv = cross(d, e2);
-    let det = dot(e1, pv);
-    if det == 0.0 || !det.is_finite() {
-        return None;
-    }
-    let tv = sub(o, p0);
-    Some((dot(tv, pv) / det, dot(d, cross(tv, e1)) / det))
-}
-
 /// How a backend's answer for one ray compares with the brute-force oracle.
 #[derive(Debug, PartialEq)]
 pub enum Verdict {
@@ -82,8 +58,8 @@ pub fn judge(
     // there may legitimately go either way in f32. A line that misses the triangle by more is
     // no excuse for a hit on it.
     let near_edge = |prim: u32| {
-        line_barycentrics(ray, oracle.mesh().triangle(prim))
-            .is_some_and(|(u, v)| u.min(v).min(1.0 - u - v).abs() < 1e-4)
+        vastocean::accel::brute::line_hit(ray, oracle.mesh().triangle(prim))
+            .is_some_and(|(_, u, v)| u.min(v).min(1.0 - u - v).abs() < 1e-4)
     };
     match (hit, all.first()) {
         (None, None) => Verdict::Same,

@@ -2,40 +2,36 @@
 //! to render with, and meant to be: it is the independent witness that the tests compare
 //! Embree and the Rust BVH against, with no acceleration structure of its own to get wrong.
 
+use glam::DVec3;
+
 use super::{Accel, Hit, Ray};
 use crate::mesh::Mesh;
 
-/// Möller–Trumbore in f64 without backface culling. Returns `(t, u, v)` with Embree's
-/// barycentric convention, or `None` for a miss or a ray parallel to the triangle.
-pub fn intersect_triangle(ray: &Ray, tri: [[f32; 3]; 3]) -> Option<(f64, f64, f64)> {
-    let f = |a: [f32; 3]| [a[0] as f64, a[1] as f64, a[2] as f64];
-    let (o, d) = (f(ray.org), f(ray.dir));
-    let (p0, p1, p2) = (f(tri[0]), f(tri[1]), f(tri[2]));
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let cross = |a: [f64; 3], b: [f64; 3]| {
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
-    };
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let (e1, e2) = (sub(p1, p0), sub(p2, p0));
-    let pv = cross(d, e2);
-    let det = dot(e1, pv);
+/// Where the ray's line meets the triangle's plane, in f64 (Möller–Trumbore without any
+/// inside or range test): `(t, u, v)` with Embree's barycentric convention, or `None` when the
+/// line is parallel to the plane or the triangle is degenerate. Shared by the oracle and by the
+/// cross-checks that ask how far a ray passes from a triangle's edges.
+pub fn line_hit(ray: &Ray, tri: [[f32; 3]; 3]) -> Option<(f64, f64, f64)> {
+    let f = |a: [f32; 3]| DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64);
+    let (o, d, p0) = (f(ray.org), f(ray.dir), f(tri[0]));
+    let (e1, e2) = (f(tri[1]) - p0, f(tri[2]) - p0);
+    let pv = d.cross(e2);
+    let det = e1.dot(pv);
     if det == 0.0 || !det.is_finite() {
         return None;
     }
     let inv = 1.0 / det;
-    let tv = sub(o, p0);
-    let u = dot(tv, pv) * inv;
-    let qv = cross(tv, e1);
-    let v = dot(d, qv) * inv;
-    if u < 0.0 || v < 0.0 || u + v > 1.0 {
-        return None;
-    }
-    let t = dot(e2, qv) * inv;
-    (t >= ray.tnear as f64 && t <= ray.tfar as f64).then_some((t, u, v))
+    let tv = o - p0;
+    let qv = tv.cross(e1);
+    Some((e2.dot(qv) * inv, tv.dot(pv) * inv, d.dot(qv) * inv))
+}
+
+/// Möller–Trumbore in f64 without backface culling. Returns `(t, u, v)` with Embree's
+/// barycentric convention, or `None` for a miss or a ray parallel to the triangle.
+pub fn intersect_triangle(ray: &Ray, tri: [[f32; 3]; 3]) -> Option<(f64, f64, f64)> {
+    let (t, u, v) = line_hit(ray, tri)?;
+    let inside = u >= 0.0 && v >= 0.0 && u + v <= 1.0;
+    (inside && t >= ray.tnear as f64 && t <= ray.tfar as f64).then_some((t, u, v))
 }
 
 /// The brute-force backend: owns its mesh, loops over all triangles per ray.

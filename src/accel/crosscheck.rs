@@ -13,6 +13,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::brute::line_hit;
 use super::bvh::Bvh;
 use super::embree::{BuildOptions, Device, EmbreeError, Scene};
 use super::{Accel, Hit, Ray};
@@ -156,31 +157,9 @@ fn compare(mesh: &Mesh, ray: &Ray, embree: Option<Hit>, rust: Option<Hit>) -> Ou
 /// (inside or outside it), computed in f64; zero for a line parallel to the triangle or a
 /// degenerate triangle, where any answer is a matter of rounding.
 pub fn edge_distance(ray: &Ray, tri: [[f32; 3]; 3]) -> f64 {
-    let f = |a: [f32; 3]| a.map(|c| c as f64);
-    let (o, d) = (f(ray.org), f(ray.dir));
-    let (p0, p1, p2) = (f(tri[0]), f(tri[1]), f(tri[2]));
-    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    let cross = |a: [f64; 3], b: [f64; 3]| {
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
-    };
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let (e1, e2) = (sub(p1, p0), sub(p2, p0));
-    let pv = cross(d, e2);
-    let det = dot(e1, pv);
-    if det == 0.0 || !det.is_finite() {
-        return 0.0;
-    }
-    let tv = sub(o, p0);
-    let u = dot(tv, pv) / det;
-    let v = dot(d, cross(tv, e1)) / det;
-    [u, v, 1.0 - u - v]
-        .into_iter()
-        .map(f64::abs)
-        .fold(f64::INFINITY, f64::min)
+    line_hit(ray, tri).map_or(0.0, |(_, u, v)| {
+        u.abs().min(v.abs()).min((1.0 - u - v).abs())
+    })
 }
 
 /// `n` rays from random points above `mesh`'s bounding box (between one and two box heights,
