@@ -72,13 +72,6 @@ impl Accel for BruteForce {
         })
     }
 
-    fn intersect_many(&self, rays: &mut [Ray], hits: &mut [Option<Hit>]) {
-        assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
-        for (r, h) in rays.iter().zip(hits.iter_mut()) {
-            *h = self.intersect(r);
-        }
-    }
-
     fn mesh(&self) -> &Mesh {
         &self.mesh
     }

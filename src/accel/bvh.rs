@@ -738,13 +738,6 @@ impl Accel for Bvh {
         self.traverse::<false>(ray)
     }
 
-    fn intersect_many(&self, rays: &mut [Ray], hits: &mut [Option<Hit>]) {
-        assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
-        for (r, h) in rays.iter().zip(hits.iter_mut()) {
-            *h = self.traverse::<false>(r);
-        }
-    }
-
     fn mesh(&self) -> &Mesh {
         &self.mesh
     }

@@ -53,8 +53,14 @@ pub struct Hit {
 pub trait Accel: Send + Sync {
     /// Closest hit of `ray`, if any.
     fn intersect(&self, ray: &Ray) -> Option<Hit>;
-    /// Closest hits of many rays; `hits.len()` must equal `rays.len()`.
-    fn intersect_many(&self, rays: &mut [Ray], hits: &mut [Option<Hit>]);
+    /// Closest hits of many rays; `hits.len()` must equal `rays.len()`. The default traces
+    /// them one by one; a backend with a batch path (Embree's packets) overrides it.
+    fn intersect_many(&self, rays: &mut [Ray], hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
+        for (r, h) in rays.iter().zip(hits.iter_mut()) {
+            *h = self.intersect(r);
+        }
+    }
     /// The mesh being traced.
     fn mesh(&self) -> &Mesh;
     /// Texture coordinate (nominal horizontal position) interpolated at a hit.

@@ -116,6 +116,16 @@ fn catmull_rom(t: f32) -> [f32; 4] {
     ]
 }
 
+/// FFT bin `i` of `n` as a signed frequency index: 0..n/2 stay, the upper half wraps negative.
+#[inline]
+fn signed_index(i: usize, n: usize) -> f64 {
+    if i < n / 2 {
+        i as f64
+    } else {
+        i as f64 - n as f64
+    }
+}
+
 impl Layer {
     /// A realization of `spectrum` on an `n` x `n` grid over `size_m`, keeping wavevectors with
     /// `band.0 <= |k| < band.1` (clipped to the Nyquist disk), with fields at `time_s`.
@@ -154,13 +164,7 @@ impl Layer {
         let k_nyquist = 0.5 * n as f64 * dk;
         let band = (band.0, band.1.min(k_nyquist));
         let half = n / 2;
-        let signed = move |i: usize| {
-            if i < half {
-                i as f64
-            } else {
-                i as f64 - n as f64
-            }
-        };
+        let signed = move |i: usize| signed_index(i, n);
         let seed = splitmix(seed);
         let rows: Vec<(Vec<C32>, Vec<f64>, f64)> = (0..n)
             .into_par_iter()
@@ -303,14 +307,7 @@ impl Layer {
         let n = self.n;
         self.time_s = t;
         let dk = TAU / self.size_m;
-        let half = n / 2;
-        let signed = move |i: usize| {
-            if i < half {
-                i as f64
-            } else {
-                i as f64 - n as f64
-            }
-        };
+        let signed = move |i: usize| signed_index(i, n);
         let lam = self.choppiness;
         let mut ht = vec![C32::default(); n * n];
         ht.par_chunks_mut(n).enumerate().for_each(|(ix, row)| {
