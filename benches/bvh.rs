@@ -56,8 +56,8 @@ fn rays_over(mesh: &Mesh, n: usize) -> Vec<Ray> {
         .collect()
 }
 
-fn trace(accel: &dyn Accel, rays: &mut [Ray], hits: &mut [Option<Hit>]) {
-    rays.par_chunks_mut(1024)
+fn trace(accel: &dyn Accel, rays: &[Ray], hits: &mut [Option<Hit>]) {
+    rays.par_chunks(1024)
         .zip(hits.par_chunks_mut(1024))
         .for_each(|(r, h)| accel.intersect_many(r, h));
 }
@@ -99,18 +99,18 @@ fn throughput(c: &mut Criterion) {
     group.sample_size(10);
     group.throughput(Throughput::Elements(RAYS as u64));
     for (name, mesh) in scenes {
-        let mut rays = rays_over(&mesh, RAYS);
+        let rays = rays_over(&mesh, RAYS);
         let mut hits = vec![None; RAYS];
         let bvh = Bvh::build(mesh.clone());
         group.bench_function(BenchmarkId::new("rust", &name), |b| {
-            b.iter(|| trace(&bvh, &mut rays, &mut hits))
+            b.iter(|| trace(&bvh, &rays, &mut hits))
         });
         #[cfg(feature = "embree")]
         {
             use vastocean::accel::embree::{BuildOptions, Scene};
             let scene = Scene::new(&device, mesh.clone(), BuildOptions::default()).unwrap();
             group.bench_function(BenchmarkId::new("embree", &name), |b| {
-                b.iter(|| trace(&scene, &mut rays, &mut hits))
+                b.iter(|| trace(&scene, &rays, &mut hits))
             });
         }
     }

@@ -18,7 +18,7 @@ fn build(c: &mut Criterion) {
         let mesh = Arc::new(Mesh::grid(side, side, 0.5));
         let tris = mesh.triangle_count() as u64;
         group.throughput(Throughput::Elements(tris));
-        for quality in Quality::ALL {
+        for &quality in Quality::ALL {
             group.bench_with_input(
                 BenchmarkId::new(format!("{quality:?}").to_lowercase(), tris),
                 &mesh,

@@ -10,11 +10,8 @@ use thiserror::Error;
 
 #[derive(Debug, Error)]
 pub enum ImageError {
-    #[error("cannot write {}: {source}", path.display())]
-    Write {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Write(#[from] WriteError),
     #[error("cannot read {}: {message}", path.display())]
     Read { path: PathBuf, message: String },
     #[error("{}: {message}", path.display())]
@@ -43,33 +40,106 @@ impl RgbImage {
     }
 }
 
-/// Writes `path` through a sibling temporary file that is renamed into place on success.
-pub fn write_atomically(
+/// A file that could not be written (the OS error is its source, not part of its message, so
+/// an error chain names it once).
+#[derive(Debug, Error)]
+#[error("cannot write {}", path.display())]
+pub struct WriteError {
+    pub path: PathBuf,
+    #[source]
+    pub source: std::io::Error,
+}
+
+/// A file written completely under a temporary name beside its destination, not yet renamed.
+/// [`Staged::commit`] renames it into place; dropping it uncommitted removes the temporary
+/// file, so every error path (and a panic) cleans up. Staging several files first and
+/// committing them after all were written makes a set of outputs appear together.
+#[must_use = "a staged file is removed unless committed"]
+pub struct Staged {
+    tmp: PathBuf,
+    path: PathBuf,
+    committed: bool,
+}
+
+/// Prefix of every temporary file the project writes: `.<name>.vastocean-tmp.<pid>.<n>`.
+pub const TEMP_MARKER: &str = ".vastocean-tmp.";
+
+fn temp_name(path: &Path) -> PathBuf {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let mut name = std::ffi::OsString::from(".");
+    name.push(path.file_name().unwrap_or_default());
+    name.push(format!("{TEMP_MARKER}{}.{n}", std::process::id()));
+    path.with_file_name(name)
+}
+
+impl Staged {
+    /// Renames the temporary file to its destination.
+    pub fn commit(mut self) -> Result<(), WriteError> {
+        let result = fs::rename(&self.tmp, &self.path);
+        self.committed = result.is_ok();
+        result.map_err(|source| WriteError {
+            path: self.path.clone(),
+            source,
+        })
+    }
+
+    /// Where the file goes when committed.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// Writes the contents of `path` to a unique temporary file in the same folder (created if
+/// missing) and syncs it to disk; nothing appears under `path` until [`Staged::commit`].
+pub fn stage(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<fs::File>) -> std::io::Result<()>,
-) -> Result<(), ImageError> {
-    let err = |source| ImageError::Write {
+) -> Result<Staged, WriteError> {
+    let err = |source| WriteError {
         path: path.to_path_buf(),
         source,
     };
+    if path.file_name().is_none() {
+        return Err(err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a file path",
+        )));
+    }
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         fs::create_dir_all(dir).map_err(err)?;
     }
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(format!(".tmp{}", std::process::id()));
-    let tmp = PathBuf::from(tmp);
+    let staged = Staged {
+        tmp: temp_name(path),
+        path: path.to_path_buf(),
+        committed: false,
+    };
+    let file = fs::File::create(&staged.tmp).map_err(err)?;
     let result = (|| {
-        let mut w = BufWriter::new(fs::File::create(&tmp)?);
+        let mut w = BufWriter::new(file);
         write(&mut w)?;
         w.flush()?;
-        w.get_ref().sync_all()?;
-        drop(w);
-        fs::rename(&tmp, path)
+        w.get_ref().sync_all()
     })();
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp);
-    }
-    result.map_err(err)
+    // On error `staged` drops here and removes the temporary file.
+    result.map(|()| staged).map_err(err)
+}
+
+/// Writes `path` atomically: it appears complete, or not at all (DESIGN.md, Errors).
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<fs::File>) -> std::io::Result<()>,
+) -> Result<(), WriteError> {
+    stage(path, write)?.commit()
 }
 
 /// Writes a linear-RGB EXR (32-bit float channels R, G, B; ZIP compression).
@@ -87,12 +157,12 @@ pub fn write_exr(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
     );
     layer.encoding.compression = Compression::ZIP16;
     let image = Image::from_layer(layer);
-    write_atomically(path, |w| {
+    Ok(write_atomically(path, |w| {
         image
             .write()
             .to_buffered(w)
             .map_err(|e| std::io::Error::other(e.to_string()))
-    })
+    })?)
 }
 
 /// Reads the RGB channels of the first layer of an EXR file as linear f32.
@@ -138,7 +208,7 @@ pub fn auto_exposure(img: &RgbImage) -> f32 {
     let mut lum: Vec<f32> = img
         .pixels
         .iter()
-        .map(|&c| crate::analysis::luminance(c))
+        .map(|&c| crate::color::luminance(c))
         .filter(|l| l.is_finite() && *l > 0.0)
         .collect();
     if lum.is_empty() {
@@ -160,7 +230,7 @@ pub fn write_png(path: &Path, img: &RgbImage, exposure: f32) -> Result<(), Image
 
 /// Writes raw 8-bit RGB rows as a PNG.
 pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), ImageError> {
-    write_atomically(path, |w| {
+    Ok(write_atomically(path, |w| {
         let mut enc = png::Encoder::new(w, width, height);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
@@ -170,15 +240,15 @@ pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Resul
             .write_image_data(rgb)
             .map_err(std::io::Error::other)?;
         writer.finish().map_err(std::io::Error::other)
-    })
+    })?)
 }
 
 /// Writes a value as pretty JSON.
 pub fn write_json(path: &Path, value: &impl serde::Serialize) -> Result<(), ImageError> {
-    write_atomically(path, |w| {
+    Ok(write_atomically(path, |w| {
         serde_json::to_writer_pretty(&mut *w, value).map_err(std::io::Error::other)?;
         w.write_all(b"\n")
-    })
+    })?)
 }
 
 /// Writes a linear-RGB EXR with half-float (f16) channels R, G, B and PIZ compression, the
@@ -218,12 +288,12 @@ pub fn write_exr_half(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
     );
     layer.encoding.compression = Compression::PIZ;
     let image = Image::from_layer(layer);
-    write_atomically(path, |w| {
+    Ok(write_atomically(path, |w| {
         image
             .write()
             .to_buffered(w)
             .map_err(|e| std::io::Error::other(e.to_string()))
-    })
+    })?)
 }
 
 #[cfg(test)]

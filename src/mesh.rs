@@ -11,6 +11,8 @@
 
 use thiserror::Error;
 
+use crate::image_io::{WriteError, write_atomically};
+
 #[derive(Debug, Error, PartialEq)]
 pub enum MeshError {
     #[error("mesh has no triangles")]
@@ -37,27 +39,50 @@ pub enum MeshError {
 /// invariants cannot be broken after construction.
 #[derive(Debug, Clone)]
 pub struct Mesh {
-    positions: Vec<[f32; 3]>,
+    positions: Padded<[f32; 3]>,
     normals: Vec<[f32; 3]>,
-    uvs: Vec<[f32; 2]>,
+    uvs: Padded<[f32; 2]>,
     indices: Vec<[u32; 3]>,
 }
 
-/// Makes the allocation hold at least one initialised element past `len`, so a 16-byte load of
-/// the last element (12-byte float3 or 8-byte float2) stays inside it.
-fn pad_one<T: Copy + Default>(v: &mut Vec<T>) {
-    v.reserve_exact(1);
-    v.push(T::default());
-    v.pop();
+/// A buffer whose allocation holds at least one initialised element past its length, so a
+/// 16-byte load of the last element (12-byte float3 or 8-byte float2) stays inside it. The
+/// padding is a property of the type: it survives `Clone` (a plain `Vec` clone drops spare
+/// capacity).
+#[derive(Debug)]
+struct Padded<T>(Vec<T>);
+
+impl<T: Copy + Default> Padded<T> {
+    fn new(mut v: Vec<T>) -> Padded<T> {
+        v.reserve_exact(1);
+        v.push(T::default());
+        v.pop();
+        Padded(v)
+    }
+}
+
+impl<T: Copy + Default> Clone for Padded<T> {
+    fn clone(&self) -> Padded<T> {
+        let mut v = Vec::with_capacity(self.0.len() + 1);
+        v.extend_from_slice(&self.0);
+        Padded::new(v)
+    }
+}
+
+impl<T> std::ops::Deref for Padded<T> {
+    type Target = [T];
+    fn deref(&self) -> &[T] {
+        &self.0
+    }
 }
 
 impl Mesh {
     /// Validates and takes ownership of the buffers. `normals` and `uvs` may be empty (no such
     /// attribute); otherwise they must have one entry per position.
     pub fn new(
-        mut positions: Vec<[f32; 3]>,
+        positions: Vec<[f32; 3]>,
         normals: Vec<[f32; 3]>,
-        mut uvs: Vec<[f32; 2]>,
+        uvs: Vec<[f32; 2]>,
         indices: Vec<[u32; 3]>,
     ) -> Result<Mesh, MeshError> {
         if indices.is_empty() {
@@ -94,12 +119,10 @@ impl Mesh {
                 });
             }
         }
-        pad_one(&mut positions);
-        pad_one(&mut uvs);
         Ok(Mesh {
-            positions,
+            positions: Padded::new(positions),
             normals,
-            uvs,
+            uvs: Padded::new(uvs),
             indices,
         })
     }
@@ -164,16 +187,16 @@ impl Mesh {
     /// Bytes held by the buffers (what a tessellation costs in memory).
     pub fn bytes(&self) -> usize {
         use std::mem::size_of_val;
-        size_of_val(self.positions.as_slice())
+        size_of_val(&*self.positions)
             + size_of_val(self.normals.as_slice())
-            + size_of_val(self.uvs.as_slice())
+            + size_of_val(&*self.uvs)
             + size_of_val(self.indices.as_slice())
     }
 
     /// Whether the position and uv allocations extend past their last element (see module doc).
     pub fn is_padded(&self) -> bool {
-        self.positions.capacity() > self.positions.len()
-            && (self.uvs.is_empty() || self.uvs.capacity() > self.uvs.len())
+        self.positions.0.capacity() > self.positions.len()
+            && (self.uvs.is_empty() || self.uvs.0.capacity() > self.uvs.len())
     }
 
     /// Interpolates a per-vertex attribute with Embree's barycentric convention:
@@ -197,22 +220,10 @@ impl Mesh {
 
 /// Writes `mesh` as binary little-endian PLY (Blender and MeshLab read it): per vertex
 /// `x y z`, then `nx ny nz` and the texture coordinate as `s t` when the mesh has them, and
-/// faces as a `uchar` count plus `uint` indices. The file is written to a temporary name in the
-/// same directory and renamed, so a failed write never leaves a partial file behind.
-pub fn write_ply(mesh: &Mesh, path: &std::path::Path) -> std::io::Result<()> {
+/// faces as a `uchar` count plus `uint` indices. Written atomically.
+pub fn write_ply(mesh: &Mesh, path: &std::path::Path) -> Result<(), WriteError> {
     use std::io::Write;
-    let name = path.file_name().ok_or_else(|| {
-        std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            format!("{} is not a file path", path.display()),
-        )
-    })?;
-    let mut tmp_name = std::ffi::OsString::from(".");
-    tmp_name.push(name);
-    tmp_name.push(format!(".{}.tmp", std::process::id()));
-    let tmp = path.with_file_name(tmp_name);
-    let write = || -> std::io::Result<()> {
-        let mut w = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(&tmp)?);
+    write_atomically(path, |w| {
         let (normals, uvs) = (!mesh.normals.is_empty(), !mesh.uvs.is_empty());
         write!(
             w,
@@ -253,15 +264,8 @@ pub fn write_ply(mesh: &Mesh, path: &std::path::Path) -> std::io::Result<()> {
                 w.write_all(&i.to_le_bytes())?;
             }
         }
-        w.into_inner().map_err(|e| e.into_error())?.sync_all()
-    };
-    match write().and_then(|()| std::fs::rename(&tmp, path)) {
-        Ok(()) => Ok(()),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
-    }
+        Ok(())
+    })
 }
 
 #[cfg(test)]
@@ -317,6 +321,7 @@ mod tests {
         let m = Mesh::new(p, vec![], vec![[0.0; 2]; 4], i).unwrap();
         assert!(m.is_padded());
         assert_eq!(m.vertex_count(), 4);
+        assert!(m.clone().is_padded(), "padding survives Clone");
     }
 
     #[test]

@@ -11,6 +11,16 @@ pub fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// SplitMix64's step and output in one: the golden-ratio increment, then [`mix64`]. A
+/// counter-mode hash of `x` (seeds, grid jitter).
+#[inline]
+pub fn splitmix64(x: u64) -> u64 {
+    mix64(x.wrapping_add(GOLDEN))
+}
+
+/// 2^64 / phi, SplitMix64's increment.
+const GOLDEN: u64 = 0x9e37_79b9_7f4a_7c15;
+
 /// A small generator seeded from a hash of its keys; cheap enough to make one per sample.
 #[derive(Clone, Debug)]
 pub struct Rng {
@@ -21,15 +31,13 @@ impl Rng {
     /// A stream keyed by `keys` (e.g. `[seed, pixel, sample]`): different keys give independent
     /// streams, equal keys give the same one.
     pub fn keyed(keys: &[u64]) -> Rng {
-        let state = keys
-            .iter()
-            .fold(0x9e37_79b9_7f4a_7c15u64, |h, &k| mix64(h ^ mix64(k)));
+        let state = keys.iter().fold(GOLDEN, |h, &k| mix64(h ^ mix64(k)));
         Rng { state }
     }
 
     #[inline]
     pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        self.state = self.state.wrapping_add(GOLDEN);
         mix64(self.state)
     }
 

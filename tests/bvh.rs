@@ -35,7 +35,7 @@ fn edge_margin(mesh: &Mesh, ray: &Ray, prim: u32) -> f64 {
 /// hit a real intersection (within f32 rounding) of the triangle it names. Returns the hits.
 fn check_against_oracle(accel: &dyn Accel, oracle: &BruteForce, rays: &[Ray]) -> Vec<Option<Hit>> {
     let mut hits = vec![None; rays.len()];
-    accel.intersect_many(&mut rays.to_vec(), &mut hits);
+    accel.intersect_many(rays, &mut hits);
     let verdicts: Vec<Verdict> = rays
         .par_iter()
         .zip(&hits)

@@ -1,10 +1,30 @@
-//! Scenes and comparisons shared by the integration tests.
-// Without Embree only the brute-force oracle remains, so some helpers have no caller yet.
-#![cfg_attr(not(feature = "embree"), allow(dead_code))]
+//! Scenes, backends and comparisons shared by the integration tests.
 
+use std::sync::Arc;
+
+use vastocean::accel::bvh::Bvh;
 use vastocean::accel::{Accel, Ray, brute::BruteForce};
 use vastocean::mesh::Mesh;
 use vastocean::rng::Rng;
+
+/// Every production backend this build has, over one mesh, the default one (Embree when
+/// built in) first: the oracles run on each.
+pub fn backends(mesh: Mesh) -> Vec<Box<dyn Accel>> {
+    let mesh = Arc::new(mesh);
+    #[allow(unused_mut)]
+    let mut all: Vec<Box<dyn Accel>> = Vec::new();
+    #[cfg(feature = "embree")]
+    {
+        use vastocean::accel::embree::{BuildOptions, Device, Scene};
+        let device = Device::new(2).expect("an Embree device");
+        all.push(Box::new(
+            Scene::new(&device, mesh.clone(), BuildOptions::default()).expect("a scene"),
+        ));
+    }
+    let pool = vastocean::accel::tracing_pool(2).expect("a pool");
+    all.push(Box::new(pool.install(|| Bvh::build(mesh))));
+    all
+}
 
 /// `n` random triangles with corners in the unit cube, edges up to about `size` long.
 pub fn random_mesh(n: usize, size: f32, seed: u64) -> Mesh {

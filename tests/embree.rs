@@ -111,7 +111,7 @@ fn rays_through_shared_edges_and_vertices_never_fall_through() {
         }
     }
     let mut hits = vec![None; rays.len()];
-    scene.intersect_many(&mut rays.clone(), &mut hits);
+    scene.intersect_many(&rays, &mut hits);
     let missed: Vec<_> = rays
         .iter()
         .zip(&hits)
@@ -138,9 +138,9 @@ fn batch_of_random_rays_agrees_with_brute_force_hit_for_hit() {
     let mesh = Arc::new(random_mesh(10_000, 0.08, 1));
     let scene = Scene::new(&device(), mesh.clone(), BuildOptions::default()).unwrap();
     let oracle = BruteForce::new((*mesh).clone());
-    let mut rays = random_rays(100_000, 2);
+    let rays = random_rays(100_000, 2);
     let mut hits = vec![None; rays.len()];
-    scene.intersect_many(&mut rays, &mut hits);
+    scene.intersect_many(&rays, &mut hits);
 
     let verdicts: Vec<Verdict> = rays
         .par_iter()
@@ -180,10 +180,10 @@ fn batch_of_random_rays_agrees_with_brute_force_hit_for_hit() {
 #[test]
 fn every_build_quality_traces_the_same_hits() {
     let mesh = Arc::new(random_mesh(2_000, 0.1, 3));
-    let mut rays = random_rays(5_000, 4);
+    let rays = random_rays(5_000, 4);
     let dev = device();
     let mut reference: Option<Vec<Option<Hit>>> = None;
-    for quality in Quality::ALL {
+    for &quality in Quality::ALL {
         for compact in [false, true] {
             let scene = Scene::new(
                 &dev,
@@ -197,7 +197,7 @@ fn every_build_quality_traces_the_same_hits() {
             .unwrap();
             assert!(scene.build_seconds() >= 0.0);
             let mut hits = vec![None; rays.len()];
-            scene.intersect_many(&mut rays, &mut hits);
+            scene.intersect_many(&rays, &mut hits);
             let prims: Vec<_> = hits.iter().map(|h| h.map(|h| h.prim)).collect();
             match &reference {
                 None => reference = Some(hits),

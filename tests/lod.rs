@@ -48,7 +48,7 @@ fn configs() -> Vec<(String, LodParams)> {
         hfov_deg: 90.0,
     };
     let mut out = Vec::new();
-    for reading in Reading::ALL {
+    for &reading in Reading::ALL {
         for (pattern, max) in [
             (Pattern::Square, 40.0),
             (Pattern::Square, 21.0),
@@ -266,7 +266,7 @@ fn expected_size(params: &LodParams, cheb: f64) -> f64 {
 fn triangle_size_follows_the_doubling_rule() {
     let flat = Surface::flat();
     let sampler = flat.sampler([0.0, 0.0]);
-    for reading in Reading::ALL {
+    for &reading in Reading::ALL {
         let params = small(reading, Pattern::Square, 90.0);
         let (mesh, stats) = tessellate(&params, &sampler).unwrap();
         let mut seen = std::collections::BTreeSet::new();
@@ -520,7 +520,7 @@ fn rays_straight_down_never_fall_through_the_displaced_mesh() {
     let scene = Scene::new(&device, Arc::new(mesh), BuildOptions::default()).unwrap();
     let mut rng = Rng::keyed(&[42, 0x6c6f64]);
     let radius = 0.9 * params.max_distance();
-    let mut rays: Vec<Ray> = (0..100_000)
+    let rays: Vec<Ray> = (0..100_000)
         .map(|_| {
             let r = radius * (rng.f32() as f64).sqrt();
             let phi = std::f64::consts::TAU * rng.f32() as f64;
@@ -531,7 +531,7 @@ fn rays_straight_down_never_fall_through_the_displaced_mesh() {
         })
         .collect();
     let mut hits = vec![None; rays.len()];
-    scene.intersect_many(&mut rays, &mut hits);
+    scene.intersect_many(&rays, &mut hits);
     let misses: Vec<_> = rays
         .iter()
         .zip(&hits)
@@ -609,7 +609,9 @@ fn ply_round_trip() {
         .map(|e| e.unwrap().file_name())
         .collect();
     assert_eq!(names, ["mesh.ply"]);
-    assert!(write_ply(&mesh, &dir.join("no-such-dir").join("m.ply")).is_err());
+    // A folder that cannot exist (its parent is a regular file): the error names the file.
+    let e = write_ply(&mesh, &dir.join("mesh.ply").join("m.ply")).unwrap_err();
+    assert!(e.to_string().contains("m.ply"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

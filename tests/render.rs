@@ -1,11 +1,8 @@
 //! The path tracer against analytic answers: a white furnace, a flat sea under a gradient sky,
 //! the mapped normal against the ocean itself, coarse vs fine meshes, determinism and grazing
-//! rays at the horizon.
-
-use std::sync::Arc;
+//! rays at the horizon. The oracles run on every backend this build has.
 
 use glam::Vec3;
-use vastocean::accel::embree::{BuildOptions, Device, Scene};
 use vastocean::accel::{Accel, Ray};
 use vastocean::image_io::RgbImage;
 use vastocean::mesh::Mesh;
@@ -51,7 +48,7 @@ fn small_ocean(choppiness: f64) -> Surface {
 
 /// The integrator's view of a test scene, tracing every ray (no skip shortcut).
 fn scene_ref<'a>(
-    accel: &'a Scene,
+    accel: &'a dyn Accel,
     sampler: Sampler<'a>,
     earth_radius_m: f64,
     sky: &'a Sky,
@@ -65,13 +62,9 @@ fn scene_ref<'a>(
     }
 }
 
-fn embree(mesh: Mesh) -> Scene {
-    Scene::new(
-        &Device::new(2).unwrap(),
-        Arc::new(mesh),
-        BuildOptions::default(),
-    )
-    .unwrap()
+/// The production backend: Embree when this build has it, else the Rust BVH.
+fn accel(mesh: Mesh) -> Box<dyn Accel> {
+    crate::common::backends(mesh).remove(0)
 }
 
 fn equirect(width: usize, band: Option<(f64, f64)>) -> Camera {
@@ -103,10 +96,8 @@ fn mapped_normal_tilt_agrees_with_the_tessellators_curved_earth_frame() {
 fn white_furnace_every_pixel_equals_the_sky() {
     let ocean = small_ocean(1.0);
     let sampler = ocean.sampler([0.0, 0.0]);
-    let accel = embree(ocean_grid(&sampler, 60.0, 0.5));
     let l = [0.5f32, 0.7, 1.0];
     let sky = Sky::analytic(AnalyticSky::Uniform { radiance: l });
-    let scene = scene_ref(&accel, sampler, 6_371_000.0, &sky);
     // R_rs = 1/pi under a uniform sky of irradiance pi L gives a water-leaving radiance of L.
     let water = Water {
         absorption: [0.0; 3],
@@ -114,31 +105,35 @@ fn white_furnace_every_pixel_equals_the_sky() {
         ..Water::default()
     };
     let upwelling = water.upwelling(sky.irradiance()).to_array();
-    for normals in [NormalMode::Vertex, NormalMode::Mapped] {
-        let settings = TraceSettings {
-            normals,
-            water,
-            upwelling,
-            ..TraceSettings::default()
-        };
-        let (img, c) = render_image(&scene, &equirect(64, None), 2.0, 4, 1, &settings, false);
-        assert!(c.hits > 1000, "the sea must be hit: {c:?}");
-        let worst = img
-            .pixels
-            .iter()
-            .map(|p| {
-                (0..3)
-                    .map(|k| ((p[k] - l[k]) / l[k]).abs())
-                    .fold(0f32, f32::max)
-            })
-            .fold(0f32, f32::max);
-        // Only paths cut at 10 segments lose energy; they are rare.
-        assert!(
-            worst < 0.01,
-            "{normals:?}: worst relative error {worst}, truncated {}",
-            c.truncated
-        );
-        assert_eq!(c.nan, 0);
+    for accel in crate::common::backends(ocean_grid(&sampler, 60.0, 0.5)) {
+        let scene = scene_ref(accel.as_ref(), sampler, 6_371_000.0, &sky);
+        for normals in [NormalMode::Vertex, NormalMode::Mapped] {
+            let settings = TraceSettings {
+                normals,
+                water,
+                upwelling,
+                ..TraceSettings::default()
+            };
+            let (img, c) = render_image(&scene, &equirect(64, None), 2.0, 4, 1, &settings, false);
+            assert!(c.hits > 1000, "the sea must be hit: {c:?}");
+            let worst = img
+                .pixels
+                .iter()
+                .map(|p| {
+                    (0..3)
+                        .map(|k| ((p[k] - l[k]) / l[k]).abs())
+                        .fold(0f32, f32::max)
+                })
+                .fold(0f32, f32::max);
+            // Only paths cut at 10 segments lose energy; they are rare.
+            assert!(
+                worst < 0.01,
+                "{} {normals:?}: worst relative error {worst}, truncated {}",
+                accel.name(),
+                c.truncated
+            );
+            assert_eq!(c.nan, 0);
+        }
     }
 }
 
@@ -146,42 +141,47 @@ fn white_furnace_every_pixel_equals_the_sky() {
 fn flat_sea_matches_the_fresnel_weighted_mirror_lookup() {
     let flat = Surface::flat();
     let sampler = flat.sampler([0.0, 0.0]);
-    let accel = embree(ocean_grid(&sampler, 4000.0, 50.0));
     let (zenith, horizon) = ([0.1f32, 0.2, 0.6], [0.9f32, 0.8, 0.7]);
     let sky = Sky::analytic(AnalyticSky::Gradient { zenith, horizon });
-    // A flat mesh: no earth curvature, so the mapped normal is +y like the geometry.
-    let scene = scene_ref(&accel, sampler, f64::INFINITY, &sky);
-    let water = Water::default();
-    let settings = TraceSettings {
-        water,
-        upwelling: water.upwelling(sky.irradiance()).to_array(),
-        ..TraceSettings::default()
-    };
-    let cam = equirect(128, Some((-2.0, -60.0)));
-    let (img, _) = render_image(&scene, &cam, 2.0, 64, 3, &settings, false);
-    let sky_at = |d: Vec3| Vec3::from(horizon).lerp(Vec3::from(zenith), d.y.clamp(0.0, 1.0));
-    let mut worst = 0f32;
-    for y in 0..cam.height {
-        for x in (0..cam.width).step_by(7) {
-            // the pixel's exact average over a 16 x 16 sub-pixel grid
-            let mut sum = Vec3::ZERO;
-            for sy in 0..16 {
-                for sx in 0..16 {
-                    let d = cam.direction(
-                        x as f32 + (sx as f32 + 0.5) / 16.0,
-                        y as f32 + (sy as f32 + 0.5) / 16.0,
-                    );
-                    let f = fresnel(-d.y, 1.0, water.ior);
-                    sum += f * sky_at(Vec3::new(d.x, -d.y, d.z))
-                        + (1.0 - f) * Vec3::from(settings.upwelling);
+    for accel in crate::common::backends(ocean_grid(&sampler, 4000.0, 50.0)) {
+        // A flat mesh: no earth curvature, so the mapped normal is +y like the geometry.
+        let scene = scene_ref(accel.as_ref(), sampler, f64::INFINITY, &sky);
+        let water = Water::default();
+        let settings = TraceSettings {
+            water,
+            upwelling: water.upwelling(sky.irradiance()).to_array(),
+            ..TraceSettings::default()
+        };
+        let cam = equirect(128, Some((-2.0, -60.0)));
+        let (img, _) = render_image(&scene, &cam, 2.0, 64, 3, &settings, false);
+        let sky_at = |d: Vec3| Vec3::from(horizon).lerp(Vec3::from(zenith), d.y.clamp(0.0, 1.0));
+        let mut worst = 0f32;
+        for y in 0..cam.height {
+            for x in (0..cam.width).step_by(7) {
+                // the pixel's exact average over a 16 x 16 sub-pixel grid
+                let mut sum = Vec3::ZERO;
+                for sy in 0..16 {
+                    for sx in 0..16 {
+                        let d = cam.direction(
+                            x as f32 + (sx as f32 + 0.5) / 16.0,
+                            y as f32 + (sy as f32 + 0.5) / 16.0,
+                        );
+                        let f = fresnel(-d.y, 1.0, water.ior);
+                        sum += f * sky_at(Vec3::new(d.x, -d.y, d.z))
+                            + (1.0 - f) * Vec3::from(settings.upwelling);
+                    }
                 }
+                let want = sum / 256.0;
+                let got = Vec3::from(img.get(x, y));
+                worst = worst.max(((got - want) / want).abs().max_element());
             }
-            let want = sum / 256.0;
-            let got = Vec3::from(img.get(x, y));
-            worst = worst.max(((got - want) / want).abs().max_element());
         }
+        assert!(
+            worst < 0.01,
+            "{}: worst relative error {worst}",
+            accel.name()
+        );
     }
-    assert!(worst < 0.01, "worst relative error {worst}");
 }
 
 #[test]
@@ -190,9 +190,9 @@ fn mapped_normal_is_the_ocean_normal_at_the_hit() {
     // be sampled there directly, independently of the texture-coordinate interpolation.
     let ocean = small_ocean(0.0);
     let sampler = ocean.sampler([0.0, 0.0]);
-    let accel = embree(ocean_grid(&sampler, 20.0, 0.8));
+    let accel = accel(ocean_grid(&sampler, 20.0, 0.8));
     let sky = Sky::analytic(AnalyticSky::default());
-    let scene = scene_ref(&accel, sampler, f64::INFINITY, &sky);
+    let scene = scene_ref(accel.as_ref(), sampler, f64::INFINITY, &sky);
     let mut rng = vastocean::rng::Rng::keyed(&[5]);
     let mut max_vertex_err = 0f32;
     for _ in 0..2000 {
@@ -217,7 +217,7 @@ fn mapped_normal_is_the_ocean_normal_at_the_hit() {
 }
 
 fn mean_abs_luminance_difference(a: &RgbImage, b: &RgbImage) -> f64 {
-    let lum = vastocean::analysis::luminance;
+    let lum = vastocean::color::luminance;
     let (num, den): (f64, f64) = a
         .pixels
         .iter()
@@ -254,8 +254,8 @@ fn vertex_and_mapped_differ_on_a_coarse_mesh_and_agree_on_a_fine_one() {
         1.0,
     );
     let diff = |cell: f32| {
-        let accel = embree(ocean_grid(&sampler, 12.0, cell));
-        let scene = scene_ref(&accel, sampler, f64::INFINITY, &sky);
+        let accel = accel(ocean_grid(&sampler, 12.0, cell));
+        let scene = scene_ref(accel.as_ref(), sampler, f64::INFINITY, &sky);
         let render = |normals| {
             render_image(
                 &scene,
@@ -287,35 +287,38 @@ fn vertex_and_mapped_differ_on_a_coarse_mesh_and_agree_on_a_fine_one() {
 fn render_is_bit_identical_for_one_and_two_threads() {
     let ocean = small_ocean(1.0);
     let sampler = ocean.sampler([0.0, 0.0]);
-    let accel = embree(ocean_grid(&sampler, 40.0, 0.5));
     let sky = Sky::analytic(AnalyticSky::default());
-    let scene = scene_ref(&accel, sampler, 6_371_000.0, &sky);
-    let render = |threads| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
-            render_image(
-                &scene,
-                &equirect(96, Some((10.0, -40.0))),
-                2.0,
-                3,
-                11,
-                &TraceSettings::default(),
-                false,
-            )
-        })
-    };
-    let (a, ca) = render(1);
-    let (b, cb) = render(2);
-    assert_eq!(ca.rays, cb.rays);
-    assert!(
-        a.pixels
-            .iter()
-            .zip(&b.pixels)
-            .all(|(p, q)| p.map(f32::to_bits) == q.map(f32::to_bits))
-    );
+    for accel in crate::common::backends(ocean_grid(&sampler, 40.0, 0.5)) {
+        let scene = scene_ref(accel.as_ref(), sampler, 6_371_000.0, &sky);
+        let render = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                render_image(
+                    &scene,
+                    &equirect(96, Some((10.0, -40.0))),
+                    2.0,
+                    3,
+                    11,
+                    &TraceSettings::default(),
+                    false,
+                )
+            })
+        };
+        let (a, ca) = render(1);
+        let (b, cb) = render(2);
+        assert_eq!(ca.rays, cb.rays);
+        assert!(
+            a.pixels
+                .iter()
+                .zip(&b.pixels)
+                .all(|(p, q)| p.map(f32::to_bits) == q.map(f32::to_bits)),
+            "{}",
+            accel.name()
+        );
+    }
 }
 
 #[test]
@@ -325,12 +328,12 @@ fn skipping_rays_that_cannot_return_changes_no_pixel() {
     let mesh = ocean_grid(&sampler, 40.0, 0.5);
     let slope = vastocean::render::integrator::max_descent_slope(&mesh).expect("a height field");
     assert!(slope > 0.0 && slope < 5.0, "{slope}");
-    let accel = embree(mesh);
+    let accel = accel(mesh);
     let sky = Sky::analytic(AnalyticSky::default());
     let render = |skip_slope| {
         let scene = SceneRef {
             skip_slope,
-            accel: &accel,
+            accel: accel.as_ref(),
             ocean: Some(sampler),
             earth_radius_m: 6_371_000.0,
             sky: &sky,
@@ -404,10 +407,10 @@ fn skipping_rays_that_cannot_return_changes_no_pixel() {
 fn grazing_rays_at_the_horizon_give_no_nan() {
     let ocean = small_ocean(1.5);
     let sampler = ocean.sampler([0.0, 0.0]);
-    let accel = embree(ocean_grid(&sampler, 300.0, 1.0));
+    let accel = accel(ocean_grid(&sampler, 300.0, 1.0));
     let mut sky = Sky::analytic(AnalyticSky::default());
     sky.dome_altitude_m = Some(200_000.0);
-    let scene = scene_ref(&accel, sampler, 6_371_000.0, &sky);
+    let scene = scene_ref(accel.as_ref(), sampler, 6_371_000.0, &sky);
     let (img, c) = render_image(
         &scene,
         &equirect(720, Some((1.0, -2.0))),
@@ -424,93 +427,4 @@ fn grazing_rays_at_the_horizon_give_no_nan() {
             .all(|p| p.iter().all(|v| v.is_finite() && *v >= 0.0))
     );
     assert!(c.hits > 0);
-}
-
-#[test]
-fn render_command_pipeline_writes_exr_png_and_sidecar() {
-    use vastocean::config::SceneConfig;
-    use vastocean::render::pipeline::{render_scene, write_outputs};
-    let mut cfg = SceneConfig::default();
-    cfg.camera.width = 96;
-    cfg.render.spp = 2;
-    cfg.render.threads = 2;
-    let mut r = render_scene(&cfg, false).unwrap();
-    let dir = std::env::temp_dir().join(format!("vastocean-render-{}", std::process::id()));
-    write_outputs(&mut r, &dir.join("scene")).unwrap();
-    let sidecar: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("scene.json")).unwrap()).unwrap();
-    for key in [
-        "triangles",
-        "seconds_total",
-        "seconds_build",
-        "seconds_trace",
-        "seconds_normal_map",
-        "rays",
-        "mrays_per_s",
-        "nan_count",
-        "wrong_side_count",
-        "exr",
-        "png",
-    ] {
-        assert!(sidecar.get(key).is_some(), "sidecar lacks {key}");
-    }
-    assert_eq!(sidecar["nan_count"], 0);
-    assert!(sidecar["triangles"].as_u64().unwrap() > 1000);
-    let img = vastocean::image_io::read_exr(&dir.join("scene.exr")).unwrap();
-    assert_eq!((img.width, img.height), (96, 48));
-    assert!(dir.join("scene.png").metadata().unwrap().len() > 100);
-    let _ = std::fs::remove_dir_all(dir);
-}
-
-#[test]
-fn tiny_compare_runs_end_to_end_and_writes_every_file() {
-    use vastocean::analysis::{CompareOptions, SCENARIOS, compare};
-    use vastocean::config::{LodChoice, LodConfig, SceneConfig};
-    let mut scene = SceneConfig::default();
-    scene.camera.width = 512;
-    scene.camera.projection = Projection::Equirect {
-        band_deg: Some((1.0, -6.0)),
-    };
-    scene.render.spp = 2;
-    scene.render.threads = 2;
-    let high = LodConfig {
-        preset: LodChoice::Custom,
-        near_size_m: Some(0.3),
-        double_distance_m: Some(18.0),
-        ..LodConfig::default()
-    };
-    let low = LodConfig {
-        preset: LodChoice::PaperLow,
-        ..LodConfig::default()
-    };
-    let opts = CompareOptions {
-        scene,
-        high,
-        low,
-        rows_deg: (0.0, -5.0),
-    };
-    let dir = std::env::temp_dir().join(format!("vastocean-compare-{}", std::process::id()));
-    let s = compare(&opts, &dir, false).unwrap();
-    for name in SCENARIOS {
-        for ext in ["exr", "png"] {
-            assert!(
-                dir.join(format!("{name}.{ext}")).is_file(),
-                "{name}.{ext} missing"
-            );
-        }
-    }
-    for f in ["stats.csv", "stats.png", "sheet.png", "summary.json"] {
-        assert!(dir.join(f).metadata().unwrap().len() > 50, "{f}");
-    }
-    // 512 px: 256 rows for 180 degrees, 0.70 degree rows; centres between 0 and -5 degrees: 7
-    assert_eq!(s.rows, 7);
-    let csv = std::fs::read_to_string(dir.join("stats.csv")).unwrap();
-    assert_eq!(csv.lines().count(), 1 + s.rows);
-    assert!(s.std_low_unmapped > 0.0 && s.improvement_ratio.is_finite());
-    assert!(s.scenarios.iter().all(|sc| sc.nan_count == 0));
-    assert_eq!(
-        s.scenarios[0].triangles, s.scenarios[1].triangles,
-        "both high scenarios trace one mesh"
-    );
-    let _ = std::fs::remove_dir_all(dir);
 }

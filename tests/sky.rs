@@ -7,13 +7,11 @@ use std::path::PathBuf;
 use std::process::Command;
 
 use glam::DVec3;
-use vastocean::analysis::luminance;
+use vastocean::color::luminance;
+use vastocean::equirect::{column_azimuth, direction64 as direction, row_elevation};
 use vastocean::image_io::{RgbImage, read_exr, write_exr, write_exr_half};
-use vastocean::render::sky_gen::{
-    Preetham, SUN_RADIUS, SkyKind, SkyModel, SkyParams, column_azimuth, direction, generate,
-    row_elevation,
-};
-use vastocean::render::sky_tools::{Ground, find_sun, info, remove_ground};
+use vastocean::sky::procedural::{Preetham, SUN_RADIUS, SkyKind, SkyModel, SkyParams, generate};
+use vastocean::sky::tools::{Ground, find_sun, info, remove_ground};
 
 fn tmp_dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("vastocean-sky-{name}-{}", std::process::id()));

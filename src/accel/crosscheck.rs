@@ -55,10 +55,7 @@ pub fn crosscheck(
     rays: &[Ray],
     threads: usize,
 ) -> Result<CrossReport, EmbreeError> {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("a rayon pool with a valid thread count");
+    let pool = super::tracing_pool(threads).expect("a rayon pool with a valid thread count");
     let device = Device::new(threads)?;
     let scene = Scene::new(&device, mesh.clone(), BuildOptions::default())?;
     let bvh = pool.install(|| Bvh::build(mesh.clone()));
@@ -105,13 +102,11 @@ pub fn crosscheck(
     })
 }
 
-/// Closest hits of `rays` through `accel` in parallel chunks, and the seconds it took. The
-/// rays are copied first (outside the timing) because `intersect_many` takes them mutably.
+/// Closest hits of `rays` through `accel` in parallel chunks, and the seconds it took.
 pub fn trace(accel: &dyn Accel, rays: &[Ray]) -> (Vec<Option<Hit>>, f64) {
-    let mut rays = rays.to_vec();
     let mut hits = vec![None; rays.len()];
     let start = Instant::now();
-    rays.par_chunks_mut(CHUNK)
+    rays.par_chunks(CHUNK)
         .zip(hits.par_chunks_mut(CHUNK))
         .for_each(|(r, h)| accel.intersect_many(r, h));
     (hits, start.elapsed().as_secs_f64())

@@ -12,6 +12,7 @@
 
 use std::ffi::{CStr, CString, c_char, c_int, c_void};
 use std::ptr::NonNull;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
@@ -66,7 +67,7 @@ fn error_name(code: i32) -> &'static str {
 
 /// BVH build quality (Embree's RTCBuildQuality). `Refit` applies to the geometry; the scene
 /// itself is then built at medium quality.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum Quality {
     Low,
@@ -76,8 +77,9 @@ pub enum Quality {
     Refit,
 }
 
+crate::config::choice!(Quality { Low => "low", Medium => "medium", High => "high", Refit => "refit" });
+
 impl Quality {
-    pub const ALL: [Quality; 4] = [Quality::Low, Quality::Medium, Quality::High, Quality::Refit];
     fn raw(self) -> ffi::vo_quality {
         match self {
             Quality::Low => ffi::VO_QUALITY_LOW,
@@ -111,8 +113,9 @@ impl Default for BuildOptions {
 type ErrorSink = Mutex<Vec<(i32, String)>>;
 
 unsafe extern "C" fn on_error(user: *mut c_void, code: c_int, message: *const c_char) {
-    // SAFETY: `user` is the `ErrorSink` boxed in `Device`, alive until the device is released;
-    // `message` is a NUL-terminated string owned by Embree for the duration of the call.
+    // SAFETY: `user` is the sink `Device` allocated with `Box::into_raw` and frees only after
+    // the device is released, and only ever shared (the Mutex serialises access); `message` is
+    // a NUL-terminated string owned by Embree for the duration of the call.
     let sink = unsafe { &*(user as *const ErrorSink) };
     let text = if message.is_null() {
         String::new()
@@ -128,12 +131,15 @@ unsafe extern "C" fn on_error(user: *mut c_void, code: c_int, message: *const c_
 
 /// An Embree device with a thread budget.
 ///
-/// Setup errors are collected per device and drained by the setup call that checks them, so
-/// build scenes on one device from one thread at a time (tracing is unrestricted); otherwise
-/// one build could report, and consume, another's error.
+/// Device errors arrive through a callback into a sink the device owns; setup calls drain it
+/// and turn what they find into an [`EmbreeError`]. A scene build holds `building` from attach
+/// to commit, so two builds on one device cannot report (and consume) each other's errors.
 pub struct Device {
     raw: NonNull<c_void>,
-    errors: Box<ErrorSink>,
+    /// Allocated with `Box::into_raw` (its address is Embree's callback argument, so it must
+    /// not move or be borrowed mutably), freed in `Drop` after the device is released.
+    sink: NonNull<ErrorSink>,
+    building: Mutex<()>,
     threads: usize,
 }
 
@@ -146,17 +152,14 @@ impl Device {
     /// Creates a device that uses `threads` threads for BVH builds (0 = all cores).
     pub fn new(threads: usize) -> Result<Arc<Device>, EmbreeError> {
         let config = device_config(threads);
-        let errors: Box<ErrorSink> = Box::default();
+        let sink = NonNull::from(Box::leak(Box::<ErrorSink>::default()));
         let c = CString::new(config.clone()).expect("config has no NUL");
-        // SAFETY: the callback and its user pointer (the boxed sink) outlive the device.
-        let raw = unsafe {
-            ffi::vo_device_new(
-                c.as_ptr(),
-                Some(on_error),
-                &*errors as *const ErrorSink as *mut c_void,
-            )
-        };
+        // SAFETY: the callback and its user pointer (the sink) outlive the device (freed in Drop
+        // after the release, or just below if there is no device).
+        let raw = unsafe { ffi::vo_device_new(c.as_ptr(), Some(on_error), sink.as_ptr().cast()) };
         let Some(raw) = NonNull::new(raw) else {
+            // SAFETY: no device holds the pointer; this is the only owner.
+            let errors = unsafe { Box::from_raw(sink.as_ptr()) };
             let message = errors
                 .lock()
                 .ok()
@@ -166,7 +169,8 @@ impl Device {
         };
         Ok(Arc::new(Device {
             raw,
-            errors,
+            sink,
+            building: Mutex::new(()),
             threads,
         }))
     }
@@ -182,11 +186,13 @@ impl Device {
         format!("{}.{}.{}", v.major, v.minor, v.patch)
     }
 
-    /// Turns a pending device error after `call` into an `Err`.
-    fn check(&self, call: &'static str) -> Result<(), EmbreeError> {
+    /// Turns a pending device error after `call` into an `Err`, clearing it.
+    pub fn check(&self, call: &'static str) -> Result<(), EmbreeError> {
         // SAFETY: raw is a live device.
         let code = unsafe { ffi::vo_device_take_error(self.raw.as_ptr()) };
-        let logged = std::mem::take(&mut *self.errors.lock().unwrap_or_else(|e| e.into_inner()));
+        // SAFETY: the sink lives as long as self and is only ever shared.
+        let sink = unsafe { self.sink.as_ref() };
+        let logged = std::mem::take(&mut *sink.lock().unwrap_or_else(|e| e.into_inner()));
         // The first logged error is the root cause; later ones are usually its consequences.
         let (code, message) = match logged.split_first() {
             None if code == 0 => return Ok(()),
@@ -208,8 +214,12 @@ impl Device {
 
 impl Drop for Device {
     fn drop(&mut self) {
-        // SAFETY: every Scene holds an Arc<Device>, so no scene outlives this release.
-        unsafe { ffi::vo_device_release(self.raw.as_ptr()) }
+        // SAFETY: every Scene holds an Arc<Device>, so no scene outlives this release. After
+        // it Embree calls the error callback no more, so the sink can go.
+        unsafe {
+            ffi::vo_device_release(self.raw.as_ptr());
+            drop(Box::from_raw(self.sink.as_ptr()));
+        }
     }
 }
 
@@ -235,6 +245,8 @@ pub struct Scene {
     build_seconds: f64,
     options: BuildOptions,
     device: Arc<Device>,
+    /// Rays with a NaN or infinite origin or direction, answered as misses without Embree.
+    rejected: AtomicU64,
 }
 
 // SAFETY: a committed scene is only read (rtcIntersect*, rtcOccluded*, rtcInterpolate), which
@@ -257,6 +269,8 @@ impl Scene {
             return Err(EmbreeError::TooLarge(mesh.triangle_count()));
         }
         let dev = device.raw.as_ptr();
+        // Held from attach to commit: errors drained below are this build's.
+        let _building = device.building.lock().unwrap_or_else(|e| e.into_inner());
         let flags = if options.compact {
             ffi::VO_SCENE_COMPACT
         } else {
@@ -322,6 +336,7 @@ impl Scene {
             build_seconds,
             options,
             device: device.clone(),
+            rejected: AtomicU64::new(0),
         })
     }
 
@@ -349,10 +364,25 @@ impl Scene {
 
     /// Whether anything lies on the ray within `[tnear, tfar]`.
     pub fn occluded(&self, ray: &Ray) -> bool {
+        if !self.admit(ray) {
+            return false;
+        }
         // SAFETY: Ray has vo_ray's layout (checked at compile time); scene is committed.
         unsafe {
             ffi::vo_occluded1(self.raw.as_ptr(), ray as *const Ray as *const ffi::vo_ray) != 0
         }
+    }
+}
+
+impl Scene {
+    /// Whether `ray` may be handed to Embree; counts the ones that may not.
+    #[inline]
+    fn admit(&self, ray: &Ray) -> bool {
+        let ok = ray.is_finite();
+        if !ok {
+            self.rejected.fetch_add(1, Ordering::Relaxed);
+        }
+        ok
     }
 }
 
@@ -367,6 +397,9 @@ fn to_hit(h: &ffi::vo_hit) -> Option<Hit> {
 
 impl Accel for Scene {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        if !self.admit(ray) {
+            return None;
+        }
         let mut h = ffi::vo_hit::default();
         // SAFETY: as in `occluded`; `h` is a valid out-parameter.
         unsafe {
@@ -379,12 +412,20 @@ impl Accel for Scene {
         to_hit(&h)
     }
 
-    fn intersect_many(&self, rays: &mut [Ray], hits: &mut [Option<Hit>]) {
+    fn intersect_many(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
         // Fixed-size chunks keep the shim's output on the stack: no allocation per batch.
         const CHUNK: usize = 64;
         let mut out = [ffi::vo_hit::default(); CHUNK];
         for (rs, hs) in rays.chunks(CHUNK).zip(hits.chunks_mut(CHUNK)) {
+            if !rs.iter().all(Ray::is_finite) {
+                // Rare: trace this chunk ray by ray, so the bad rays are answered (and counted)
+                // without reaching Embree.
+                for (r, h) in rs.iter().zip(hs.iter_mut()) {
+                    *h = self.intersect(r);
+                }
+                continue;
+            }
             // SAFETY: `rs` is a slice of vo_ray-layout rays; `out` has room for rs.len() hits.
             unsafe {
                 ffi::vo_intersect_batch(
@@ -428,6 +469,14 @@ impl Accel for Scene {
     fn name(&self) -> &'static str {
         "embree"
     }
+
+    fn rejected_rays(&self) -> u64 {
+        self.rejected.load(Ordering::Relaxed)
+    }
+
+    fn take_error(&self) -> Option<String> {
+        self.device.check("tracing").err().map(|e| e.to_string())
+    }
 }
 
 impl Drop for Scene {
@@ -451,7 +500,8 @@ pub struct EmbreeInfo {
 
 /// Probes Embree with `verbose=1` and reads its own report. `threads` as in [`Device::new`].
 /// Embree prints that report to stdout only, so the shim redirects file descriptor 1 for the
-/// duration of the probe: call this before the program prints anything of its own.
+/// duration of the probe: only `vastocean info` calls this, before it prints anything. (Versions
+/// elsewhere come from `rtcGetDeviceProperty`, [`Device::version`].)
 pub fn describe(threads: usize) -> Result<EmbreeInfo, EmbreeError> {
     let device = Device::new(threads)?;
     let version = device.version();

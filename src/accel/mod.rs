@@ -15,6 +15,19 @@ pub mod embree;
 
 use crate::mesh::Mesh;
 
+/// A rayon pool of `threads` workers (0 = all cores) for building and tracing. With Embree,
+/// every worker sets flush-to-zero and denormals-are-zero first, as Embree asks of every thread
+/// that traces (DESIGN.md, Parallelism); every pool that traces is made here.
+pub fn tracing_pool(threads: usize) -> Result<rayon::ThreadPool, rayon::ThreadPoolBuildError> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .start_handler(|_| {
+            #[cfg(feature = "embree")]
+            embree::flush_denormals_on_this_thread();
+        })
+        .build()
+}
+
 /// A ray: points `org + t·dir` for `t` in `[tnear, tfar]`. The layout matches the C shim's
 /// `vo_ray`, so batches are handed to Embree without copying.
 #[repr(C)]
@@ -38,6 +51,13 @@ impl Ray {
     pub fn at(&self, t: f32) -> [f32; 3] {
         std::array::from_fn(|i| self.org[i] + t * self.dir[i])
     }
+    /// Origin and direction finite, the range not NaN: a ray a backend may trace.
+    #[inline]
+    pub fn is_finite(&self) -> bool {
+        self.org.iter().chain(&self.dir).all(|c| c.is_finite())
+            && !self.tnear.is_nan()
+            && !self.tfar.is_nan()
+    }
 }
 
 /// The closest hit of a ray on primitive `prim` at parameter `t`, barycentrics `(u, v)`.
@@ -55,7 +75,7 @@ pub trait Accel: Send + Sync {
     fn intersect(&self, ray: &Ray) -> Option<Hit>;
     /// Closest hits of many rays; `hits.len()` must equal `rays.len()`. The default traces
     /// them one by one; a backend with a batch path (Embree's packets) overrides it.
-    fn intersect_many(&self, rays: &mut [Ray], hits: &mut [Option<Hit>]) {
+    fn intersect_many(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
         for (r, h) in rays.iter().zip(hits.iter_mut()) {
             *h = self.intersect(r);
@@ -70,4 +90,14 @@ pub trait Accel: Send + Sync {
     }
     /// Short name for reports ("embree", "brute", ...).
     fn name(&self) -> &'static str;
+    /// Rays refused so far because their origin or direction was NaN or infinite (answered as
+    /// misses; such a ray never reaches the traversal).
+    fn rejected_rays(&self) -> u64 {
+        0
+    }
+    /// An error the backend reported while tracing, if any, clearing it (Embree's device
+    /// errors are not checked per ray, only here and on setup calls).
+    fn take_error(&self) -> Option<String> {
+        None
+    }
 }

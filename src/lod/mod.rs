@@ -43,13 +43,15 @@ mod build;
 mod earth;
 
 use std::fmt;
-use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+use crate::config::{CameraConfig, LodChoice, LodConfig, Projection};
 use crate::mesh::{Mesh, MeshError};
 use crate::ocean::Sampler;
+
+pub use crate::config::lod::{Pattern, Reading};
 
 pub use earth::{curved_frame_point, horizon_distance};
 
@@ -71,88 +73,18 @@ pub const FRUSTUM_MARGIN_DEG: f64 = 3.0;
 /// are almost certainly a mistake (e.g. millimetre triangles to the horizon).
 pub const MAX_TRIANGLES: usize = 500_000_000;
 
-/// Which part of the nested grids is tessellated (the two patterns of the paper's Figure 1).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, Default)]
-#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
-pub enum Pattern {
-    /// Nested square grids in all directions, cut at the maximum distance.
-    #[default]
-    Square,
-    /// Only the cells a perspective camera looking along `yaw_deg` (degrees from +x towards +z,
-    /// the ocean's convention) with horizontal field of view `hfov_deg` can see, with
-    /// [`FRUSTUM_MARGIN_DEG`] on each side; cells closer than the camera height are kept too,
-    /// as a camera pitched down sees them.
-    Frustum { yaw_deg: f64, hfov_deg: f64 },
-}
-
-impl fmt::Display for Pattern {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Pattern::Square => write!(f, "square"),
-            Pattern::Frustum { yaw_deg, hfov_deg } => write!(f, "frustum:{yaw_deg}:{hfov_deg}"),
-        }
-    }
-}
-
-/// Parses `square` or `frustum:YAW_DEG:HFOV_DEG` (for command lines).
-impl FromStr for Pattern {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let bad = || format!("pattern must be `square` or `frustum:YAW_DEG:HFOV_DEG` (got `{s}`)");
-        let mut parts = s.split(':');
-        match parts.next() {
-            Some("square") if parts.next().is_none() => Ok(Pattern::Square),
-            Some("frustum") => {
-                let mut num = || parts.next().and_then(|p| p.trim().parse::<f64>().ok());
-                let (yaw_deg, hfov_deg) = (num().ok_or_else(bad)?, num().ok_or_else(bad)?);
-                if parts.next().is_some() {
-                    return Err(bad());
-                }
-                Ok(Pattern::Frustum { yaw_deg, hfov_deg })
-            }
-            _ => Err(bad()),
-        }
-    }
-}
-
-/// Readings of the doubling rule (see the module doc for the triangle counts of each).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default, clap::ValueEnum)]
-#[serde(rename_all = "kebab-case")]
-pub enum Reading {
-    /// As `nested`, but the ring that reaches the maximum distance is kept whole (a full square,
-    /// not cut at the horizon).
-    #[default]
-    NestedWhole,
-    /// Ring k ends at d 2^k (d, 2d, 4d, ...); the generation cap ends the tessellation.
-    Nested,
-    /// Ring k is d 2^k wide, ending at d (2^(k+1) - 1) (d, 3d, 7d, ...: the paper's worked
-    /// example); the generation cap ends the tessellation.
-    Widths,
-    /// As `nested`, but the cap only stops the doubling: the last generation reaches the
-    /// maximum distance.
-    NestedToHorizon,
-    /// As `widths`, but the cap only stops the doubling.
-    WidthsToHorizon,
-}
-
+/// How each reading treats the rings (see the module doc).
 impl Reading {
-    pub const ALL: [Reading; 5] = [
-        Reading::NestedWhole,
-        Reading::Nested,
-        Reading::Widths,
-        Reading::NestedToHorizon,
-        Reading::WidthsToHorizon,
-    ];
-    fn widths(self) -> bool {
+    pub(crate) fn widths(self) -> bool {
         matches!(self, Reading::Widths | Reading::WidthsToHorizon)
     }
-    fn cap_ends_tessellation(self) -> bool {
+    pub(crate) fn cap_ends_tessellation(self) -> bool {
         matches!(
             self,
             Reading::NestedWhole | Reading::Nested | Reading::Widths
         )
     }
-    fn whole_last_ring(self) -> bool {
+    pub(crate) fn whole_last_ring(self) -> bool {
         self == Reading::NestedWhole
     }
 }
@@ -160,8 +92,7 @@ impl Reading {
 /// The two tessellations of the paper's section 5, as their triangle counts define them: no
 /// generation cap, so with the default reading they have exactly the paper's 22 341 600 and
 /// 25 520 triangles for a 2 m camera (see the module doc on the text's "6 generations").
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "kebab-case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Preset {
     /// 3 cm near the camera, double distance 18 m.
     PaperHigh,
@@ -314,6 +245,53 @@ impl LodParams {
             camera_height_m,
         }
     }
+}
+
+/// The parameters a scene's `[lod]` section asks for, for its camera: the preset (or `auto`
+/// from the image width) with the section's overrides applied. The pattern follows the camera:
+/// all directions for the 360 degree camera, only the field of view for a pinhole (skip what is
+/// not seen).
+pub fn params_for(lod: &LodConfig, camera: &CameraConfig) -> Result<LodParams, LodError> {
+    let h = camera.height_m;
+    let mut p = match lod.preset {
+        LodChoice::PaperHigh => Preset::PaperHigh.params(h),
+        LodChoice::PaperLow | LodChoice::Custom => Preset::PaperLow.params(h),
+        LodChoice::Auto => LodParams::auto(h, camera.width as u32),
+    };
+    if lod.preset == LodChoice::Custom
+        && (lod.near_size_m.is_none() || lod.double_distance_m.is_none())
+    {
+        return Err(invalid(
+            "near_size_m and lod.double_distance_m",
+            "set when lod.preset = \"custom\"",
+            "nothing",
+        ));
+    }
+    if let Some(v) = lod.near_size_m {
+        p.near_size_m = v;
+    }
+    if let Some(v) = lod.double_distance_m {
+        p.double_distance_m = v;
+    }
+    if lod.generations.is_some() {
+        p.generations = lod.generations;
+    }
+    if lod.max_distance_m.is_some() {
+        p.max_distance_m = lod.max_distance_m;
+    }
+    if let Some(r) = lod.reading {
+        p.reading = r;
+    }
+    if let Projection::Pinhole {
+        hfov_deg, yaw_deg, ..
+    } = camera.projection
+    {
+        // The frustum pattern culls on the horizontal field of view; a wide image's diagonal
+        // reaches further sideways than hfov, which the pattern's own margin covers.
+        p.pattern = Pattern::Frustum { yaw_deg, hfov_deg };
+    }
+    p.validate()?;
+    Ok(p)
 }
 
 /// One ring of the tessellation in the statistics.

@@ -37,7 +37,9 @@ use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 
 use super::spectrum::Spectrum;
-use super::{Interp, MAX_N, MIN_N, OceanError};
+use super::{Interp, OceanError};
+use crate::config::ocean::{MAX_N, MIN_N};
+use crate::rng::splitmix64;
 
 /// Number of fields per texel.
 pub const FIELD_COUNT: usize = 8;
@@ -77,13 +79,6 @@ pub struct Layer {
     fields: Vec<Texel>,
     fft: Arc<dyn Fft<f32>>,
     inv_dx: f64,
-}
-
-pub(crate) fn splitmix(mut x: u64) -> u64 {
-    x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    x ^ (x >> 31)
 }
 
 /// Two independent standard normals (Box-Muller).
@@ -165,7 +160,7 @@ impl Layer {
         let band = (band.0, band.1.min(k_nyquist));
         let half = n / 2;
         let signed = move |i: usize| signed_index(i, n);
-        let seed = splitmix(seed);
+        let seed = splitmix64(seed);
         let rows: Vec<(Vec<C32>, Vec<f64>, f64)> = (0..n)
             .into_par_iter()
             .map(|ix| {
@@ -451,14 +446,7 @@ impl Layer {
     pub fn eval_direct(&self, x: f64, z: f64) -> [f64; FIELD_COUNT] {
         let n = self.n;
         let dk = TAU / self.size_m;
-        let half = n / 2;
-        let signed = |i: usize| {
-            if i < half {
-                i as f64
-            } else {
-                i as f64 - n as f64
-            }
-        };
+        let signed = |i: usize| signed_index(i, n);
         let lam = self.choppiness;
         let mut v = [0.0f64; FIELD_COUNT];
         for ix in 0..n {

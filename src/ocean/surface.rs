@@ -300,7 +300,7 @@ impl Surface {
                 let mut folded = 0;
                 let mut sum2 = 0.0;
                 for c in 0..m {
-                    let h = super::layer::splitmix(((r * m + c) as u64) ^ self.seed);
+                    let h = crate::rng::splitmix64(((r * m + c) as u64) ^ self.seed);
                     let jx = (h & 0xFFFF_FFFF) as f64 / 4_294_967_296.0;
                     let jz = (h >> 32) as f64 / 4_294_967_296.0;
                     let u = ((c as f64 + jx) / m as f64 * size) as f32;

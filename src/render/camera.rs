@@ -1,24 +1,11 @@
 //! Cameras: the paper's equirectangular 360 x 180 degree camera (optionally restricted to an
 //! elevation band, so near-horizon studies do not pay for the whole sphere) and a pinhole
-//! perspective camera. Directions are y-up; azimuth 0 looks along +x, 90 degrees along +z.
+//! perspective camera. Directions follow [`crate::equirect`]: y up, azimuth 0 along +x.
 
 use glam::Vec3;
-use serde::{Deserialize, Serialize};
 
-/// Which camera and its parameters.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
-pub enum Projection {
-    /// Full sphere; `band_deg = Some((top, bottom))` renders only elevations from `top` down to
-    /// `bottom` degrees (e.g. (1, -6)) at the full-sphere pixel pitch.
-    Equirect { band_deg: Option<(f64, f64)> },
-    /// Pinhole with horizontal field of view, looking at azimuth `yaw_deg`, elevation `pitch_deg`.
-    Pinhole {
-        hfov_deg: f64,
-        yaw_deg: f64,
-        pitch_deg: f64,
-    },
-}
+pub use crate::config::Projection;
+use crate::equirect;
 
 /// A camera with its image size. For the equirectangular camera `width` is the full 360 degree
 /// width; the full-sphere height is `width / 2` and `height` is the band's row count.
@@ -41,9 +28,10 @@ impl Camera {
                 let (row0, rows) = match band_deg {
                     None => (0, full_h),
                     Some((top, bottom)) => {
-                        let r0 = Self::elevation_to_row(top, full_h).floor().max(0.0) as usize;
-                        let r1 =
-                            (Self::elevation_to_row(bottom, full_h).ceil() as usize).min(full_h);
+                        let r0 =
+                            equirect::elevation_deg_to_row(top, full_h).floor().max(0.0) as usize;
+                        let r1 = (equirect::elevation_deg_to_row(bottom, full_h).ceil() as usize)
+                            .min(full_h);
                         (r0, r1.saturating_sub(r0).max(1))
                     }
                 };
@@ -63,27 +51,20 @@ impl Camera {
         }
     }
 
-    /// Full-sphere row coordinate (0 at the top edge, `full_h` at the bottom) of an elevation.
-    pub fn elevation_to_row(elevation_deg: f64, full_h: usize) -> f64 {
-        (90.0 - elevation_deg) / 180.0 * full_h as f64
-    }
-
     /// Elevation in degrees at the centre of image row `y` (equirectangular camera).
     pub fn row_elevation_deg(&self, y: usize) -> f64 {
-        let full_h = (self.width / 2) as f64;
-        90.0 - (self.row0 + y) as f64 * 180.0 / full_h - 90.0 / full_h
+        equirect::row_elevation_deg(self.row0 + y, self.width / 2)
     }
 
     /// Direction through image position (x, y) in pixels (fractional: x + 0.5 is a pixel centre).
     pub fn direction(&self, x: f32, y: f32) -> Vec3 {
         match self.projection {
-            Projection::Equirect { .. } => {
-                let full_h = (self.width / 2) as f32;
-                let az = std::f32::consts::TAU * x / self.width as f32;
-                let el = std::f32::consts::FRAC_PI_2
-                    - std::f32::consts::PI * (self.row0 as f32 + y) / full_h;
-                Vec3::new(el.cos() * az.cos(), el.sin(), el.cos() * az.sin())
-            }
+            Projection::Equirect { .. } => equirect::pixel_direction(
+                x,
+                self.row0 as f32 + y,
+                self.width as f32,
+                (self.width / 2) as f32,
+            ),
             Projection::Pinhole {
                 hfov_deg,
                 yaw_deg,
@@ -94,11 +75,7 @@ impl Camera {
                 let sy = (1.0 - 2.0 * y / self.height as f32) * tan_half * self.height as f32
                     / self.width as f32;
                 let (yaw, pitch) = (yaw_deg.to_radians() as f32, pitch_deg.to_radians() as f32);
-                let fwd = Vec3::new(
-                    pitch.cos() * yaw.cos(),
-                    pitch.sin(),
-                    pitch.cos() * yaw.sin(),
-                );
+                let fwd = equirect::direction(pitch, yaw);
                 let right = Vec3::new(-yaw.sin(), 0.0, yaw.cos());
                 let up = right.cross(fwd);
                 (fwd + sx * right + sy * up).normalize()

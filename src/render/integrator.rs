@@ -14,29 +14,18 @@
 //! point's floating-point error (pbrt-v4, section 6.8.6), not by a fixed epsilon.
 
 use glam::Vec3;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
-use super::sky::Sky;
-use super::water::{Water, fresnel, reflect, refract};
+use super::water::{fresnel, reflect, refract};
 use crate::accel::{Accel, Hit, Ray};
+use crate::config::{NormalMode, SceneConfig, Water};
 use crate::mesh::Mesh;
 use crate::ocean::Sampler;
 use crate::rng::Rng;
-
-/// Where the shading normal comes from (DESIGN.md, Normal modes).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum NormalMode {
-    /// Barycentric interpolation of the vertex normals.
-    Vertex,
-    /// Eq. 7 from the ocean layers at the interpolated texture coordinate.
-    #[default]
-    Mapped,
-}
+use crate::sky::Sky;
 
 /// Path-tracing settings.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct TraceSettings {
     pub normals: NormalMode,
     /// Most segments (rays) in one path.
@@ -50,18 +39,21 @@ pub struct TraceSettings {
 }
 
 impl Default for TraceSettings {
+    /// The default scene's settings under a sky of irradiance pi (radiance ~1).
     fn default() -> Self {
-        let water = Water::default();
-        // The built-in default sky's irradiance is about pi (a sky of radiance ~1).
-        let upwelling = water
-            .upwelling(Vec3::splat(std::f32::consts::PI))
-            .to_array();
+        TraceSettings::new(&SceneConfig::default(), Vec3::splat(std::f32::consts::PI))
+    }
+}
+
+impl TraceSettings {
+    /// The settings of `scene` under a sky of downwelling irradiance `sky_irradiance`.
+    pub fn new(scene: &SceneConfig, sky_irradiance: Vec3) -> TraceSettings {
         TraceSettings {
-            normals: NormalMode::Mapped,
-            max_segments: 10,
-            branch_depth: 3,
-            water,
-            upwelling,
+            normals: scene.render.normals,
+            max_segments: scene.render.max_segments,
+            branch_depth: scene.render.branch_depth,
+            water: scene.water,
+            upwelling: scene.water.upwelling(sky_irradiance).to_array(),
         }
     }
 }

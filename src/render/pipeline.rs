@@ -3,7 +3,7 @@
 //! needed to reproduce and judge the image (configuration, seed, triangle counts, timings, ray
 //! counts, the NaN guard and wrong-side counts).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -11,18 +11,16 @@ use serde::Serialize;
 use thiserror::Error;
 
 use super::integrator::max_descent_slope;
-use super::{Camera, Counters, SceneRef, Sky, render_image};
-use crate::accel::Accel;
+use super::{Camera, Counters, SceneRef, TraceSettings, render_image};
 use crate::accel::bvh::Bvh;
 #[cfg(feature = "embree")]
-use crate::accel::embree::{
-    BuildOptions, Device, EmbreeError, Scene, flush_denormals_on_this_thread,
-};
-use crate::config::Backend;
-use crate::config::{ConfigError, SceneConfig};
-use crate::image_io::{ImageError, RgbImage, auto_exposure, write_exr, write_json, write_png};
-use crate::lod::{LodError, LodParams, LodStats, tessellate};
+use crate::accel::embree::{BuildOptions, Device, EmbreeError, Scene};
+use crate::accel::{Accel, tracing_pool};
+use crate::config::{Backend, ConfigError, SceneConfig};
+use crate::image_io::{ImageError, RgbImage};
+use crate::lod::{EARTH_RADIUS_M, LodError, LodParams, LodStats, tessellate};
 use crate::ocean::{OceanError, Surface};
+use crate::sky::Sky;
 
 #[derive(Debug, Error)]
 pub enum RenderError {
@@ -41,8 +39,13 @@ pub enum RenderError {
     NoEmbree,
     #[error(transparent)]
     Image(#[from] ImageError),
-    #[error("cannot start the worker threads: {0}")]
+    #[error("cannot start the worker threads")]
     Threads(#[from] rayon::ThreadPoolBuildError),
+    #[error("the {backend} backend reported an error while tracing: {message}")]
+    Trace {
+        backend: &'static str,
+        message: String,
+    },
 }
 
 /// The JSON sidecar of a render (also printed by `vastocean render --json`).
@@ -75,6 +78,8 @@ pub struct RenderReport {
     pub rays: u64,
     pub mrays_per_s: f64,
     pub nan_count: u64,
+    /// Rays the backend refused for a NaN or infinite origin or direction (answered as misses).
+    pub rejected_rays: u64,
     pub wrong_side_count: u64,
     pub backfacing_shading_count: u64,
     pub truncated_paths: u64,
@@ -105,7 +110,7 @@ pub fn make_sky(cfg: &SceneConfig) -> Result<Sky, RenderError> {
         None => Sky::analytic(cfg.sky.analytic),
     };
     sky.dome_altitude_m = cfg.sky.dome_altitude_m;
-    sky.earth_radius_m = cfg.lod_params()?.earth_radius_m;
+    sky.earth_radius_m = EARTH_RADIUS_M;
     sky.camera_height_m = cfg.camera.height_m;
     sky.scale = cfg.sky.scale;
     Ok(sky)
@@ -137,21 +142,10 @@ pub struct Prepared {
 /// Builds the ocean, the tessellation and the BVH of a validated scene.
 pub fn prepare(cfg: &SceneConfig) -> Result<Prepared, RenderError> {
     cfg.validate()?;
-    let threads = if cfg.render.threads == 0 {
-        std::thread::available_parallelism().map_or(1, |n| n.get())
-    } else {
-        cfg.render.threads
-    };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .start_handler(|_| {
-            // Embree asks every tracing thread for FTZ/DAZ; the Rust BVH does not need it.
-            #[cfg(feature = "embree")]
-            flush_denormals_on_this_thread()
-        })
-        .build()?;
+    let lod = crate::lod::params_for(&cfg.lod, &cfg.camera)?;
+    let pool = tracing_pool(cfg.render.threads)?;
+    let threads = pool.current_num_threads();
     let sky = make_sky(cfg)?;
-    let lod = cfg.lod_params()?;
     let (ocean, seconds_ocean, mesh, stats, seconds_tessellation) =
         pool.install(|| -> Result<_, RenderError> {
             let t = Instant::now();
@@ -222,11 +216,17 @@ impl Prepared {
                 cfg.camera.height_m as f32,
                 cfg.render.spp,
                 cfg.render.seed,
-                &cfg.trace_settings(self.sky_irradiance),
+                &TraceSettings::new(cfg, self.sky_irradiance),
                 progress,
             )
         });
         let seconds_trace = t.elapsed().as_secs_f64();
+        if let Some(message) = self.accel.take_error() {
+            return Err(RenderError::Trace {
+                backend: self.accel.name(),
+                message,
+            });
+        }
         let seconds_normal_map = c.normal_map_thread_seconds() / self.threads as f64;
         let mesh = self.accel.mesh();
         let seconds_build = self.seconds_build;
@@ -256,6 +256,7 @@ impl Prepared {
             rays: c.rays,
             mrays_per_s: c.rays as f64 / seconds_trace.max(1e-12) / 1e6,
             nan_count: c.nan,
+            rejected_rays: self.accel.rejected_rays(),
             wrong_side_count: c.wrong_side,
             backfacing_shading_count: c.backfacing_shading,
             truncated_paths: c.truncated,
@@ -281,23 +282,6 @@ impl Prepared {
 /// filled in by [`write_outputs`].
 pub fn render_scene(cfg: &SceneConfig, progress: bool) -> Result<Rendered, RenderError> {
     prepare(cfg)?.render(cfg, progress)
-}
-
-/// Writes `<prefix>.exr`, `<prefix>.png` and `<prefix>.json`, each atomically.
-pub fn write_outputs(r: &mut Rendered, prefix: &Path) -> Result<(), RenderError> {
-    let with = |ext: &str| {
-        let mut p = prefix.as_os_str().to_owned();
-        p.push(ext);
-        PathBuf::from(p)
-    };
-    let (exr, png, json) = (with(".exr"), with(".png"), with(".json"));
-    write_exr(&exr, &r.image)?;
-    write_png(&png, &r.image, auto_exposure(&r.image))?;
-    r.report.exr = exr;
-    r.report.png = png;
-    r.report.json = json.clone();
-    write_json(&json, &r.report)?;
-    Ok(())
 }
 
 #[cfg(test)]

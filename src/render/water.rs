@@ -5,35 +5,8 @@
 //! configurable upwelling radiance, so the sea has a body colour rather than black.
 
 use glam::Vec3;
-use serde::{Deserialize, Serialize};
 
-/// Optical properties of the water.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct Water {
-    /// Refractive index relative to air.
-    pub ior: f32,
-    /// Absorption coefficients, 1/m, per linear RGB channel.
-    pub absorption: [f32; 3],
-    /// Remote-sensing reflectance R_rs = L_w / E_d, 1/sr, per channel: the water-leaving
-    /// radiance L_w per unit downwelling irradiance E_d. What a downward ray that never meets
-    /// the surface again returns is R_rs times the sky's irradiance ([`Water::upwelling`]), so
-    /// the sea's body colour keeps its proportion to any sky, in any units.
-    pub upwelling_rrs: [f32; 3],
-}
-
-impl Default for Water {
-    fn default() -> Self {
-        // Pure-water absorption at ~600/550/450 nm (Pope & Fry 1997); R_rs of clear open ocean
-        // in the red, green and blue (about 0.0003, 0.002, 0.008 1/sr; cf. Morel & Maritorena
-        // 2001).
-        Water {
-            ior: 1.333,
-            absorption: [0.25, 0.07, 0.02],
-            upwelling_rrs: [0.0003, 0.002, 0.008],
-        }
-    }
-}
+pub use crate::config::Water;
 
 /// Unpolarised Fresnel reflectance for light arriving at cosine `cos_i` (> 0) from a medium
 /// of index `eta_i` onto one of index `eta_t`. Returns 1 for total internal reflection.

@@ -4,7 +4,7 @@
 //! transmittance of their appendix), the CIE standard overcast sky (Moon & Spencer 1942:
 //! L(theta) = Lz (1 + 2 cos theta) / 3), and a partly cloudy sky (the clear sky under a seeded
 //! fBm cloud layer at a fixed altitude, lit by the sun), rendered into equirectangular maps in
-//! the convention of [`super::sky`] (y up, horizon at the middle row, azimuth 0 = +x at the
+//! the convention of [`crate::equirect`] (y up, horizon at the middle row, azimuth 0 = +x at the
 //! left edge, 90 degrees = +z).
 //!
 //! Units: one map unit is 1e5 cd/m^2 (100 kcd/m^2), luminance-weighted linear sRGB. Preetham's
@@ -19,7 +19,8 @@ use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use thiserror::Error;
 
-use super::sky_tools::{Ground, remove_ground};
+use super::tools::{Ground, remove_ground};
+use crate::equirect::{column_azimuth, direction64 as direction, row_elevation};
 use crate::image_io::RgbImage;
 
 /// kcd/m^2 per map unit.
@@ -29,13 +30,18 @@ pub const SUN_LUMINANCE_EXTRATERRESTRIAL: f64 = 1.96e9;
 /// Angular radius of the sun's disc (0.53 degrees across), radians.
 pub const SUN_RADIUS: f64 = 0.53 / 2.0 * PI / 180.0;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum SkyKind {
+    /// Preetham clear sky with the sun.
     Clear,
+    /// CIE standard overcast sky (no sun).
     Overcast,
+    /// The clear sky under a seeded cloud layer.
     PartlyCloudy,
 }
+
+crate::config::choice!(SkyKind { Clear => "clear", Overcast => "overcast", PartlyCloudy => "partly-cloudy" });
 
 /// What to generate.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -105,21 +111,6 @@ impl SkyParams {
         }
         Ok(())
     }
-}
-
-/// Unit direction at elevation `el` and azimuth `az` (radians) in the map convention.
-pub fn direction(el: f64, az: f64) -> DVec3 {
-    DVec3::new(el.cos() * az.cos(), el.sin(), el.cos() * az.sin())
-}
-
-/// Elevation (radians) of the centre of row `j` of a map `h` rows high.
-pub fn row_elevation(j: usize, h: usize) -> f64 {
-    FRAC_PI_2 - (j as f64 + 0.5) / h as f64 * PI
-}
-
-/// Azimuth (radians) of the centre of column `i` of a map `w` columns wide.
-pub fn column_azimuth(i: usize, w: usize) -> f64 {
-    (i as f64 + 0.5) / w as f64 * TAU
 }
 
 /// CIE XYZ -> linear sRGB (D65).

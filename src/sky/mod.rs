@@ -1,52 +1,27 @@
 //! Image-based sky light (the paper lights every scene only with 360-degree sky maps, section 5;
-//! Debevec 1998). A sky is an equirectangular map (y up, horizon at the middle row, azimuth 0
-//! along +x at the left edge, 90 degrees along +z) or a built-in analytic sky, looked up
+//! Debevec 1998). A sky is an equirectangular map (the convention of [`crate::equirect`]) or a
+//! built-in analytic sky ([`AnalyticSky`]), looked up
 //! either at infinity or on a spherical dome at a given altitude above the curved earth (the
 //! paper used 200 km), where rays leaving from far-away ocean points see the map with the
 //! parallax a real dome gives.
 
+pub mod procedural;
+pub mod tools;
+
 use std::path::Path;
 
 use glam::{DVec3, Vec3};
-use serde::{Deserialize, Serialize};
 
+pub use crate::config::AnalyticSky;
+use crate::equirect;
 use crate::image_io::{ImageError, RgbImage, read_exr};
 
-/// A built-in sky that needs no file.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
-pub enum AnalyticSky {
-    /// The same radiance in every direction (white furnace tests).
-    Uniform { radiance: [f32; 3] },
-    /// Linear in sin(elevation) from `horizon` (and below) to `zenith`.
-    Gradient { zenith: [f32; 3], horizon: [f32; 3] },
-    /// A clear sky: blue zenith brightening towards a hazy horizon, a glow around the sun and a
-    /// 0.53 degree sun disc. A simple empirical model, not a spectral one (see the skies issue).
-    Clear {
-        sun_elevation_deg: f32,
-        sun_azimuth_deg: f32,
-        sun_radiance: f32,
-        sky_scale: f32,
-    },
-}
-
-impl Default for AnalyticSky {
-    /// A low sun, where the paper found normal mapping matters most.
-    fn default() -> Self {
-        AnalyticSky::Clear {
-            sun_elevation_deg: 4.0,
-            sun_azimuth_deg: 180.0,
-            sun_radiance: 2000.0,
-            sky_scale: 1.0,
-        }
-    }
-}
-
-/// Angular radius of the sun, radians (0.53 degree diameter).
+/// Angular radius of the analytic sky's sun, radians (0.53 degree diameter).
 pub const SUN_RADIUS_RAD: f32 = 0.004_625;
 
 impl AnalyticSky {
-    fn radiance(&self, d: Vec3) -> Vec3 {
+    /// Radiance arriving from direction `d`.
+    pub fn radiance(&self, d: Vec3) -> Vec3 {
         match *self {
             AnalyticSky::Uniform { radiance } => Vec3::from(radiance),
             AnalyticSky::Gradient { zenith, horizon } => {
@@ -60,7 +35,7 @@ impl AnalyticSky {
                 sky_scale,
             } => {
                 let (el, az) = (sun_elevation_deg.to_radians(), sun_azimuth_deg.to_radians());
-                let sun = Vec3::new(el.cos() * az.cos(), el.sin(), el.cos() * az.sin());
+                let sun = equirect::direction(el, az);
                 let cos_g = d.dot(sun).clamp(-1.0, 1.0);
                 let gamma = cos_g.acos();
                 if gamma < SUN_RADIUS_RAD {
@@ -171,18 +146,11 @@ impl Sky {
 /// Samples an analytic sky at the texel centres of a `width` x `width / 2` equirectangular map.
 pub fn rasterize(sky: &AnalyticSky, width: usize) -> RgbImage {
     let mut img = RgbImage::new(width, width / 2);
+    let (w, h) = (width as f32, img.height as f32);
     for y in 0..img.height {
-        let el = std::f32::consts::FRAC_PI_2
-            - std::f32::consts::PI * (y as f32 + 0.5) / img.height as f32;
         for x in 0..width {
-            let az = std::f32::consts::TAU * (x as f32 + 0.5) / width as f32;
-            img.pixels[y * width + x] = sky
-                .radiance(Vec3::new(
-                    el.cos() * az.cos(),
-                    el.sin(),
-                    el.cos() * az.sin(),
-                ))
-                .to_array();
+            let d = equirect::pixel_direction(x as f32 + 0.5, y as f32 + 0.5, w, h);
+            img.pixels[y * width + x] = sky.radiance(d).to_array();
         }
     }
     img
@@ -239,11 +207,10 @@ pub fn validate_map(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
 /// Bilinear lookup of an equirectangular map, wrapping in azimuth and clamping at the poles.
 pub fn lookup(img: &RgbImage, d: Vec3) -> Vec3 {
     let (w, h) = (img.width as f32, img.height as f32);
-    let az = d.z.atan2(d.x).rem_euclid(std::f32::consts::TAU);
-    let el = d.y.clamp(-1.0, 1.0).asin();
-    let x = az / std::f32::consts::TAU * w - 0.5;
-    let y =
-        ((std::f32::consts::FRAC_PI_2 - el) / std::f32::consts::PI * h - 0.5).clamp(0.0, h - 1.0);
+    // Continuous pixel coordinates; texel centres sit at +0.5.
+    let (x, y) = equirect::direction_pixel(d, w, h);
+    let x = x - 0.5;
+    let y = (y - 0.5).clamp(0.0, h - 1.0);
     let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);
     let xi = |x: f32| (x as i64).rem_euclid(img.width as i64) as usize;

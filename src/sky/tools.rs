@@ -1,15 +1,13 @@
-//! Tools for equirectangular sky maps (convention of [`super::sky`]): statistics (solid-angle
+//! Tools for equirectangular sky maps (convention of [`crate::equirect`]): statistics (solid-angle
 //! weighted luminance, the sun found as a blurred luminance maximum, the share of energy near the
 //! horizon), import of real HDR photographs with the ground below the horizon removed as the
 //! paper did for its skies (section 5), rotation in azimuth, and a contact sheet of previews.
 
-use std::f64::consts::{PI, TAU};
-
 use glam::{DVec3, Vec3};
 use serde::Serialize;
 
-use super::sky_gen::{column_azimuth, direction, row_elevation};
-use crate::analysis::luminance;
+use crate::color::luminance;
+use crate::equirect::{column_azimuth, direction64 as direction, row_elevation, texel_solid_angle};
 use crate::image_io::{RgbImage, auto_exposure, tonemap};
 
 /// What `sky info` reports.
@@ -27,11 +25,6 @@ pub struct SkyInfo {
     /// Share of the sphere's solid-angle weighted luminance within 5 degrees above or below the
     /// horizon.
     pub horizon_energy_fraction: f64,
-}
-
-/// Solid angle of a texel in row `j`.
-fn texel_solid_angle(j: usize, w: usize, h: usize) -> f64 {
-    TAU / w as f64 * PI / h as f64 * row_elevation(j, h).cos()
 }
 
 fn lum64(c: [f32; 3]) -> f64 {
@@ -139,7 +132,8 @@ pub fn find_sun(img: &RgbImage) -> (f64, f64) {
 }
 
 /// How `sky import` treats the part of a photograph below the horizon.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Ground {
     /// A smooth continuation of the sky just above the horizon, darkening with depression.
     Fill,
@@ -148,6 +142,8 @@ pub enum Ground {
     /// Leave the photograph's ground.
     Keep,
 }
+
+crate::config::choice!(Ground { Fill => "fill", Mirror => "mirror", Keep => "keep" });
 
 /// Replaces the lower half of the map (everything below the horizon) as `ground` says.
 pub fn remove_ground(img: &mut RgbImage, ground: Ground) {

@@ -1,26 +1,16 @@
-//! The paper's statistics (section 5): relative luminance (Rec. 709 primaries, the paper's
-//! reference [13]) of linear RGB, per-pixel differences of a scenario against the baseline,
-//! their azimuth-averaged mean and standard deviation for every elevation row near the horizon
-//! (0 to -5 degrees by default), and the band average of each. [`compare`] runs the paper's four
-//! scenarios (high/low tessellation x with/without normal mapping; `compare`) plus a noise floor (the
-//! baseline again with other sample seeds) and writes the renders, `stats.csv`, the plots and
-//! `summary.json`.
+//! The paper's statistics (section 5): per-pixel differences of relative luminance
+//! ([`crate::color::luminance`]) of a scenario against the baseline, their azimuth-averaged
+//! mean and standard deviation for every elevation row near the horizon (0 to -5 degrees by
+//! default), and the band average of each; [`plot`] draws them (the paper's Figure 5) and the
+//! renders side by side (Figure 4). `crate::app::compare` runs the scenarios.
 
-mod compare;
-mod plot;
-
-pub use compare::{CompareError, CompareOptions, CompareSummary, SCENARIOS, ScenarioInfo, compare};
+pub mod plot;
 
 use serde::Serialize;
 
+use crate::color::luminance;
 use crate::image_io::RgbImage;
 use crate::render::Camera;
-
-/// Relative luminance Y = 0.2126 R + 0.7152 G + 0.0722 B of linear RGB.
-#[inline]
-pub fn luminance(c: [f32; 3]) -> f32 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
-}
 
 /// Azimuth-averaged statistics of a luminance difference on one elevation row.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -88,12 +78,6 @@ mod tests {
             3600,
             2.0,
         )
-    }
-
-    #[test]
-    fn luminance_weights_sum_to_one() {
-        assert!((luminance([1.0; 3]) - 1.0).abs() < 1e-6);
-        assert!(luminance([0.0, 1.0, 0.0]) > luminance([1.0, 0.0, 0.0]));
     }
 
     #[test]

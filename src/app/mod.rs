@@ -1,0 +1,127 @@
+//! The jobs behind the commands, one file each: plain configuration in, a result struct out,
+//! no printing (progress bars on stderr aside, when asked for). The command line (`main.rs`)
+//! parses flags into these configurations, calls one function and prints the result (its
+//! `Display` is the human report, its `Serialize` the `--json` one).
+//!
+//! Every job returns [`AppError`], which says whether the user's input was at fault (exit code
+//! 2) or the run failed (exit code 1).
+
+pub mod compare;
+#[cfg(feature = "embree")]
+pub mod crosscheck;
+pub mod info;
+pub mod mesh;
+pub mod ocean;
+pub mod render;
+pub mod sky;
+#[cfg(feature = "embree")]
+pub mod smoke;
+
+use std::error::Error;
+
+type BoxError = Box<dyn Error + Send + Sync>;
+
+/// What went wrong in a job, classed by who can fix it.
+#[derive(Debug, thiserror::Error)]
+pub enum AppError {
+    /// Bad input: an argument, a scene file, a sky map. Exit code 2.
+    #[error(transparent)]
+    Input(BoxError),
+    /// A failure while running (out of memory, a write that failed, a device error). Exit
+    /// code 1.
+    #[error(transparent)]
+    Run(BoxError),
+}
+
+impl AppError {
+    /// Bad input described by a message.
+    pub fn input(message: impl Into<String>) -> AppError {
+        AppError::Input(message.into().into())
+    }
+
+    /// The process exit code for this error.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            AppError::Input(_) => 2,
+            AppError::Run(_) => 1,
+        }
+    }
+}
+
+/// Errors in what the user gave: the configuration, the ocean and LOD parameters, input files.
+impl From<crate::config::ConfigError> for AppError {
+    fn from(e: crate::config::ConfigError) -> AppError {
+        AppError::Input(e.into())
+    }
+}
+
+impl From<crate::lod::LodError> for AppError {
+    fn from(e: crate::lod::LodError) -> AppError {
+        use crate::lod::LodError;
+        match e {
+            LodError::Mesh(_) => AppError::Run(e.into()),
+            _ => AppError::Input(e.into()),
+        }
+    }
+}
+
+impl From<crate::ocean::OceanError> for AppError {
+    fn from(e: crate::ocean::OceanError) -> AppError {
+        use crate::ocean::OceanError;
+        match e {
+            OceanError::Image(_) => AppError::Run(e.into()),
+            _ => AppError::Input(e.into()),
+        }
+    }
+}
+
+/// Reading an image is the user's file at fault; writing one is a failure of the run.
+impl From<crate::image_io::ImageError> for AppError {
+    fn from(e: crate::image_io::ImageError) -> AppError {
+        use crate::image_io::ImageError;
+        match e {
+            ImageError::Write(_) => AppError::Run(e.into()),
+            _ => AppError::Input(e.into()),
+        }
+    }
+}
+
+impl From<crate::image_io::WriteError> for AppError {
+    fn from(e: crate::image_io::WriteError) -> AppError {
+        AppError::Run(e.into())
+    }
+}
+
+impl From<crate::render::pipeline::RenderError> for AppError {
+    fn from(e: crate::render::pipeline::RenderError) -> AppError {
+        use crate::render::pipeline::RenderError;
+        match e {
+            RenderError::Config(e) => e.into(),
+            RenderError::Ocean(e) => e.into(),
+            RenderError::Lod(e) => e.into(),
+            RenderError::Image(e) => e.into(),
+            RenderError::NoEmbree => AppError::Input(e.into()),
+            _ => AppError::Run(e.into()),
+        }
+    }
+}
+
+impl From<rayon::ThreadPoolBuildError> for AppError {
+    fn from(e: rayon::ThreadPoolBuildError) -> AppError {
+        AppError::Run(e.into())
+    }
+}
+
+#[cfg(feature = "embree")]
+impl From<crate::accel::embree::EmbreeError> for AppError {
+    fn from(e: crate::accel::embree::EmbreeError) -> AppError {
+        AppError::Run(e.into())
+    }
+}
+
+/// `PREFIX` + `ext`: the files of one output set (`out/render` -> `out/render.exr`).
+pub fn with_extension(prefix: &std::path::Path, ext: &str) -> std::path::PathBuf {
+    let mut p = prefix.as_os_str().to_owned();
+    p.push(ext);
+    p.into()
+}

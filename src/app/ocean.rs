@@ -1,0 +1,99 @@
+//! `vastocean ocean`: builds the FFT layers of a sea state and reports the spectrum's and the
+//! realization's statistics, optionally with a preview PNG seen from above.
+
+use std::fmt;
+use std::path::PathBuf;
+
+use serde::Serialize;
+
+use super::AppError;
+use crate::ocean::{OceanParams, OceanSummary, Surface, write_preview_png};
+
+/// An ocean job.
+#[derive(Clone, Debug)]
+pub struct OceanJob {
+    pub params: OceanParams,
+    pub seed: u64,
+    /// Write the preview here, covering this many metres (default: the coarsest layer).
+    pub png: Option<(PathBuf, Option<f64>)>,
+}
+
+/// What was generated.
+#[derive(Clone, Debug, Serialize)]
+pub struct OceanReport {
+    #[serde(flatten)]
+    pub summary: OceanSummary,
+    #[serde(skip)]
+    pub params: OceanParams,
+    #[serde(skip)]
+    pub png: Option<PathBuf>,
+}
+
+impl OceanReport {
+    /// Warnings a user should see (on stderr).
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        if self.summary.folded_fraction > 0.0 {
+            w.push(format!(
+                "{:.3}% of the surface folds over itself (Jacobian <= 0); lower --choppiness to avoid it",
+                100.0 * self.summary.folded_fraction
+            ));
+        }
+        w
+    }
+}
+
+pub fn run(job: &OceanJob) -> Result<OceanReport, AppError> {
+    job.params.validate()?;
+    let surface = Surface::new(&job.params, job.seed)?;
+    let summary = surface.summary();
+    if let Some((path, extent)) = &job.png {
+        let extent = extent.unwrap_or(job.params.layers[0].size_m);
+        write_preview_png(&surface, path, 1024, extent)?;
+    }
+    Ok(OceanReport {
+        summary,
+        params: job.params.clone(),
+        png: job.png.as_ref().map(|p| p.0.clone()),
+    })
+}
+
+impl fmt::Display for OceanReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let (p, s) = (&self.params, &self.summary);
+        writeln!(
+            f,
+            "ocean: wind {} m/s, fetch {} km, depth {} m, seed {}",
+            p.wind_speed, p.fetch_km, p.depth_m, s.seed
+        )?;
+        writeln!(
+            f,
+            "  layer   size (m)     n   spacing (m)   band k (rad/m)      spectrum RMS   realization RMS"
+        )?;
+        for (i, l) in s.layers.iter().enumerate() {
+            writeln!(
+                f,
+                "  {i:>5} {:>10.2} {:>5} {:>13.4} {:>9.3} - {:<9.3} {:>11.4} m {:>15.4} m",
+                l.size_m, l.n, l.spacing_m, l.k_min, l.k_max, l.spectrum_rms_m, l.realization_rms_m
+            )?;
+        }
+        writeln!(
+            f,
+            "  spectrum RMS      {:.4} m (over the layers' bands; model spectrum {:.4} m, amplitude scale {:.4})",
+            s.spectrum_rms_m, s.model_rms_m, s.amplitude_scale
+        )?;
+        writeln!(
+            f,
+            "  realization RMS   {:.4} m (sampled surface {:.4} m)",
+            s.realization_rms_m, s.sampled_rms_m
+        )?;
+        writeln!(f, "  Hs                {:.3} m", s.hs_m)?;
+        writeln!(f, "  peak wavelength   {:.2} m", s.peak_wavelength_m)?;
+        writeln!(f, "  folded fraction   {:.5}", s.folded_fraction)?;
+        write!(f, "  generated in      {:.3} s", s.seconds)?;
+        if let Some(png) = &self.png {
+            write!(f, "\n  preview           {}", png.display())?;
+        }
+        Ok(())
+    }
+}

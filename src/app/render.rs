@@ -1,0 +1,80 @@
+//! `vastocean render`: one scene end to end (ocean, tessellation, BVH, path tracing) into
+//! `PREFIX.exr` (linear RGB), `PREFIX.png` (tone-mapped preview) and `PREFIX.json` (the
+//! sidecar: every parameter, timings per phase, ray counts, guards).
+
+use std::fmt;
+use std::path::PathBuf;
+
+use super::{AppError, with_extension};
+use crate::config::SceneConfig;
+use crate::image_io::{auto_exposure, write_exr, write_json, write_png};
+use crate::render::pipeline::{RenderReport, render_scene};
+
+/// A render job.
+#[derive(Clone, Debug)]
+pub struct RenderJob {
+    pub scene: SceneConfig,
+    /// Output prefix: writes PREFIX.exr, PREFIX.png and PREFIX.json.
+    pub out: PathBuf,
+    /// Show a progress bar on stderr.
+    pub progress: bool,
+}
+
+/// Renders the scene and writes its three files; returns the sidecar.
+pub fn run(job: &RenderJob) -> Result<RenderReport, AppError> {
+    job.scene.validate()?;
+    let mut r = render_scene(&job.scene, job.progress)?;
+    let (exr, png, json) = (
+        with_extension(&job.out, ".exr"),
+        with_extension(&job.out, ".png"),
+        with_extension(&job.out, ".json"),
+    );
+    write_exr(&exr, &r.image)?;
+    write_png(&png, &r.image, auto_exposure(&r.image))?;
+    r.report.exr = exr;
+    r.report.png = png;
+    r.report.json = json.clone();
+    write_json(&json, &r.report)?;
+    Ok(r.report)
+}
+
+impl fmt::Display for RenderReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "rendered {} x {} at {} spp: {} triangles ({}), {:.1} M rays at {:.2} Mrays/s",
+            self.width,
+            self.height,
+            self.spp,
+            self.triangles,
+            self.embree_version
+                .as_deref()
+                .map_or_else(|| "Rust BVH".to_string(), |v| format!("Embree {v}")),
+            self.rays as f64 / 1e6,
+            self.mrays_per_s
+        )?;
+        writeln!(
+            f,
+            "  seconds: ocean {:.2}, tessellation {:.2}, BVH {:.2}, trace {:.2} (normal mapping ~{:.2}, {:.1}%), total {:.2}",
+            self.seconds_ocean,
+            self.seconds_tessellation,
+            self.seconds_build,
+            self.seconds_trace,
+            self.seconds_normal_map,
+            100.0 * self.normal_map_share,
+            self.seconds_total
+        )?;
+        writeln!(
+            f,
+            "  NaN samples {}, wrong-side directions {}, truncated paths {}",
+            self.nan_count, self.wrong_side_count, self.truncated_paths
+        )?;
+        write!(
+            f,
+            "  wrote {} {} {}",
+            self.exr.display(),
+            self.png.display(),
+            self.json.display()
+        )
+    }
+}

@@ -1,0 +1,326 @@
+//! The scene description: one TOML file (or the defaults) holding the ocean case, the LOD
+//! tessellation, the camera, the sky, the water and the render settings, and its validation.
+//! Plain data at the bottom of the crate: it imports no stage; the stages read what they need
+//! from it. Unknown keys are errors, and every error names the offending field as it is
+//! spelled in the file (e.g. `camera.height_m must be finite and > 0 (got -2)`).
+//!
+//! Enums that are spelled as text (in files and on the command line) implement [`Choice`]:
+//! one list of names serves serde, `FromStr`, `Display` and the command line's possible values.
+
+pub mod camera;
+pub mod lod;
+pub mod ocean;
+pub mod render;
+pub mod sky;
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+pub use camera::{CameraConfig, Projection};
+pub use lod::{LodChoice, LodConfig, Pattern, Reading};
+pub use ocean::OceanParams;
+pub use render::{Backend, NormalMode, RenderConfig, Water};
+pub use sky::{AnalyticSky, SkyConfig};
+
+#[derive(Debug, Error)]
+pub enum ConfigError {
+    #[error("cannot read {}", path.display())]
+    Read {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{}: {message}", path.display())]
+    Parse { path: PathBuf, message: String },
+    #[error("{field} must be {requirement} (got {got})")]
+    Invalid {
+        field: String,
+        requirement: String,
+        got: String,
+    },
+}
+
+pub(crate) fn invalid(field: &str, requirement: &str, got: impl std::fmt::Display) -> ConfigError {
+    ConfigError::Invalid {
+        field: field.into(),
+        requirement: requirement.into(),
+        got: got.to_string(),
+    }
+}
+
+pub(crate) fn positive(field: &str, v: f64) -> Result<(), ConfigError> {
+    // NaN is not finite.
+    if v > 0.0 && v.is_finite() {
+        Ok(())
+    } else {
+        Err(invalid(field, "finite and > 0", v))
+    }
+}
+
+/// An enum spelled as text: its names in declaration order. `FromStr` and `Display` use them,
+/// and so does serde (a test checks that they agree).
+pub trait Choice:
+    Copy + PartialEq + std::fmt::Display + std::str::FromStr<Err = String> + 'static
+{
+    const ALL: &'static [Self];
+    fn name(self) -> &'static str;
+    /// The names, comma-separated, for messages.
+    fn names() -> String {
+        Self::ALL
+            .iter()
+            .map(|v| v.name())
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+/// Implements [`Choice`], `Display` and `FromStr` for a fieldless enum from `Variant => "name"`
+/// pairs, and an inherent `ALL`.
+macro_rules! choice {
+    ($t:ident { $($v:ident => $n:literal),+ $(,)? }) => {
+        impl $t {
+            pub const ALL: &'static [$t] = &[$($t::$v),+];
+        }
+        impl $crate::config::Choice for $t {
+            const ALL: &'static [$t] = $t::ALL;
+            fn name(self) -> &'static str {
+                match self {
+                    $($t::$v => $n),+
+                }
+            }
+        }
+        impl std::fmt::Display for $t {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str($crate::config::Choice::name(*self))
+            }
+        }
+        impl std::str::FromStr for $t {
+            type Err = String;
+            fn from_str(s: &str) -> Result<$t, String> {
+                use $crate::config::Choice;
+                $t::ALL
+                    .iter()
+                    .copied()
+                    .find(|v| v.name() == s)
+                    .ok_or_else(|| format!("`{s}` is not one of: {}", $t::names()))
+            }
+        }
+    };
+}
+pub(crate) use choice;
+
+/// A whole scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct SceneConfig {
+    pub ocean: OceanParams,
+    pub lod: LodConfig,
+    pub camera: CameraConfig,
+    pub sky: SkyConfig,
+    pub water: Water,
+    pub render: RenderConfig,
+}
+
+impl SceneConfig {
+    /// Reads a TOML scene; a relative sky file is resolved against the file's folder.
+    pub fn load(path: &Path) -> Result<SceneConfig, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+            path: path.into(),
+            source,
+        })?;
+        let mut cfg: SceneConfig = toml::from_str(&text).map_err(|e| ConfigError::Parse {
+            path: path.into(),
+            message: e.to_string(),
+        })?;
+        if let (Some(f), Some(dir)) = (&cfg.sky.file, path.parent())
+            && f.is_relative()
+        {
+            cfg.sky.file = Some(dir.join(f));
+        }
+        Ok(cfg)
+    }
+
+    /// Checks every section field by field; the first problem is returned with its field name.
+    /// (Whether the tessellation's sizes fit together once a preset's defaults are merged in is
+    /// the tessellator's check, `crate::lod::params_for`.)
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        self.ocean.validate()?;
+        self.lod.validate()?;
+        self.camera.validate()?;
+        self.sky.validate()?;
+        let w = &self.water;
+        if !(w.ior >= 1.0 && w.ior.is_finite()) {
+            return Err(invalid("water.ior", "finite and >= 1", w.ior));
+        }
+        for (name, v) in [
+            ("water.absorption", w.absorption),
+            ("water.upwelling_rrs", w.upwelling_rrs),
+        ] {
+            if !v.iter().all(|x| x.is_finite() && *x >= 0.0) {
+                return Err(invalid(name, "finite and >= 0", format!("{v:?}")));
+            }
+        }
+        let r = &self.render;
+        if !(1..=1_000_000).contains(&r.spp) {
+            return Err(invalid("render.spp", "in 1..=1000000", r.spp));
+        }
+        if !(1..=64).contains(&r.max_segments) {
+            return Err(invalid("render.max_segments", "in 1..=64", r.max_segments));
+        }
+        if r.branch_depth > r.max_segments.min(16) {
+            return Err(invalid(
+                "render.branch_depth",
+                "at most max_segments and 16 (each level doubles the rays)",
+                r.branch_depth,
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl CameraConfig {
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        positive("camera.height_m", self.height_m)?;
+        if !self.position_m.iter().all(|v| v.is_finite()) {
+            return Err(invalid(
+                "camera.position_m",
+                "finite",
+                format!("{:?}", self.position_m),
+            ));
+        }
+        if !(2..=65_536).contains(&self.width) {
+            return Err(invalid("camera.width", "in 2..=65536", self.width));
+        }
+        positive("camera.aspect", self.aspect)?;
+        match self.projection {
+            Projection::Equirect {
+                band_deg: Some((top, bottom)),
+            } => {
+                if !(top.is_finite()
+                    && bottom.is_finite()
+                    && (-90.0..=90.0).contains(&top)
+                    && (-90.0..=90.0).contains(&bottom)
+                    && top > bottom)
+                {
+                    return Err(invalid(
+                        "camera.projection.band_deg",
+                        "(top, bottom) with 90 >= top > bottom >= -90",
+                        format!("({top}, {bottom})"),
+                    ));
+                }
+            }
+            Projection::Pinhole {
+                hfov_deg,
+                yaw_deg,
+                pitch_deg,
+            } => {
+                if !(hfov_deg > 0.0 && hfov_deg < 179.0) {
+                    return Err(invalid(
+                        "camera.projection.hfov_deg",
+                        "in (0, 179)",
+                        hfov_deg,
+                    ));
+                }
+                if !yaw_deg.is_finite() || !(-90.0..=90.0).contains(&pitch_deg) {
+                    return Err(invalid(
+                        "camera.projection",
+                        "finite yaw and pitch in [-90, 90]",
+                        format!("yaw {yaw_deg}, pitch {pitch_deg}"),
+                    ));
+                }
+            }
+            Projection::Equirect { band_deg: None } => {}
+        }
+        Ok(())
+    }
+}
+
+impl SkyConfig {
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        if let Some(a) = self.dome_altitude_m {
+            positive("sky.dome_altitude_m", a)?;
+        }
+        if !(self.scale >= 0.0 && self.scale.is_finite()) {
+            return Err(invalid("sky.scale", "finite and >= 0", self.scale));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_round_trip_through_toml() {
+        let c = SceneConfig::default();
+        c.validate().unwrap();
+        let text = toml::to_string(&c).unwrap();
+        let back: SceneConfig = toml::from_str(&text).unwrap();
+        assert_eq!(back, c);
+    }
+
+    #[test]
+    fn unknown_keys_and_bad_values_name_the_field() {
+        let e = toml::from_str::<SceneConfig>("[camera]\nheigth_m = 2\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("heigth_m"), "{e}");
+        let c: SceneConfig = toml::from_str("[camera]\nheight_m = -2\n").unwrap();
+        assert_eq!(
+            c.validate().unwrap_err().to_string(),
+            "camera.height_m must be finite and > 0 (got -2)"
+        );
+        let c: SceneConfig = toml::from_str("[render]\nspp = 0\n").unwrap();
+        assert!(
+            c.validate()
+                .unwrap_err()
+                .to_string()
+                .starts_with("render.spp")
+        );
+        let c: SceneConfig = toml::from_str("[lod]\npreset = \"custom\"\n").unwrap();
+        assert!(
+            c.validate()
+                .unwrap_err()
+                .to_string()
+                .starts_with("lod.near_size_m")
+        );
+        let c: SceneConfig =
+            toml::from_str("[camera.projection]\nkind = \"equirect\"\nband_deg = [-6.0, 1.0]\n")
+                .unwrap();
+        assert!(
+            c.validate()
+                .unwrap_err()
+                .to_string()
+                .starts_with("camera.projection.band_deg")
+        );
+    }
+
+    /// Serde's spelling of every variant is the one `Display` and `FromStr` use.
+    fn names_agree<T: Choice + Serialize + serde::de::DeserializeOwned + std::fmt::Debug>() {
+        for &v in T::ALL {
+            let json = serde_json::to_value(v).unwrap();
+            assert_eq!(json, serde_json::Value::String(v.name().into()), "{v:?}");
+            assert_eq!(serde_json::from_value::<T>(json).unwrap(), v);
+            assert!(v.name().parse::<T>().is_ok_and(|p| p == v));
+        }
+        assert!("nonsense".parse::<T>().unwrap_err().contains("nonsense"));
+    }
+
+    #[test]
+    fn text_names_agree_with_serde() {
+        names_agree::<LodChoice>();
+        names_agree::<Reading>();
+        names_agree::<NormalMode>();
+        names_agree::<Backend>();
+        names_agree::<ocean::SpectrumKind>();
+        names_agree::<ocean::SpreadingKind>();
+        names_agree::<ocean::Interp>();
+        assert_eq!(
+            "paper-hi".parse::<LodChoice>().unwrap_err(),
+            "`paper-hi` is not one of: paper-high, paper-low, auto, custom"
+        );
+    }
+}

@@ -1,0 +1,102 @@
+//! How a scene is rendered: samples, seeds, threads, the shading normals (the paper's
+//! "with/without normal mapping"), path length, the tracing backend, and the water's optics.
+
+use serde::{Deserialize, Serialize};
+
+/// Where the shading normal comes from (DESIGN.md, Normal modes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum NormalMode {
+    /// Barycentric interpolation of the vertex normals (the paper's "without normal mapping").
+    Vertex,
+    /// Eq. 7 from the ocean layers at the interpolated texture coordinate.
+    #[default]
+    Mapped,
+}
+
+super::choice!(NormalMode { Vertex => "vertex", Mapped => "mapped" });
+
+/// Which BVH traces the scene: Embree when this build has it, else the Rust BVH.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Backend {
+    /// Debian's Embree through the C shim.
+    Embree,
+    /// The pure-Rust BVH (src/accel/bvh).
+    Rust,
+}
+
+super::choice!(Backend { Embree => "embree", Rust => "rust" });
+
+impl Default for Backend {
+    fn default() -> Self {
+        if cfg!(feature = "embree") {
+            Backend::Embree
+        } else {
+            Backend::Rust
+        }
+    }
+}
+
+/// The render section of a scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RenderConfig {
+    pub spp: u32,
+    /// Seed of the Monte Carlo samples.
+    pub seed: u64,
+    /// Seed of the ocean: which realization of the sea state (kept apart from `seed`, so the
+    /// same sea can be rendered with independent noise).
+    pub ocean_seed: u64,
+    /// Worker threads for tessellation, Embree and tracing (0 = all cores).
+    pub threads: usize,
+    pub normals: NormalMode,
+    /// Most segments (rays) in one path (the paper: 10).
+    pub max_segments: u32,
+    /// Hits up to this depth branch into both reflection and refraction; deeper ones choose one.
+    pub branch_depth: u32,
+    pub backend: Backend,
+}
+
+impl Default for RenderConfig {
+    fn default() -> Self {
+        RenderConfig {
+            spp: 16,
+            seed: 1,
+            ocean_seed: 1,
+            threads: 0,
+            normals: NormalMode::Mapped,
+            max_segments: 10,
+            branch_depth: 3,
+            backend: Backend::default(),
+        }
+    }
+}
+
+/// Optical properties of the water.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Water {
+    /// Refractive index relative to air.
+    pub ior: f32,
+    /// Absorption coefficients, 1/m, per linear RGB channel.
+    pub absorption: [f32; 3],
+    /// Remote-sensing reflectance R_rs = L_w / E_d, 1/sr, per channel: the water-leaving
+    /// radiance L_w per unit downwelling irradiance E_d. What a downward ray that never meets
+    /// the surface again returns is R_rs times the sky's irradiance (`Water::upwelling` in `crate::render::water`), so
+    /// the sea's body colour keeps its proportion to any sky, in any units.
+    pub upwelling_rrs: [f32; 3],
+}
+
+impl Default for Water {
+    fn default() -> Self {
+        // Pure-water absorption at ~600/550/450 nm (Pope & Fry 1997); R_rs of clear open ocean
+        // in the red, green and blue (about 0.0003, 0.002, 0.008 1/sr; cf. Morel & Maritorena
+        // 2001).
+        Water {
+            ior: 1.333,
+            absorption: [0.25, 0.07, 0.02],
+            upwelling_rrs: [0.0003, 0.002, 0.008],
+        }
+    }
+}

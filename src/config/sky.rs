@@ -1,0 +1,60 @@
+//! The sky section of a scene: a sky map file or a built-in analytic sky, the dome's altitude
+//! and a radiance scale (the paper lights its scenes with 360-degree sky maps only, section 5).
+
+use std::path::PathBuf;
+
+use serde::{Deserialize, Serialize};
+
+/// A built-in sky that needs no file.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum AnalyticSky {
+    /// The same radiance in every direction (white furnace tests).
+    Uniform { radiance: [f32; 3] },
+    /// Linear in sin(elevation) from `horizon` (and below) to `zenith`.
+    Gradient { zenith: [f32; 3], horizon: [f32; 3] },
+    /// A clear sky: blue zenith brightening towards a hazy horizon, a glow around the sun and a
+    /// 0.53 degree sun disc. A simple empirical model, not a spectral one (see the skies issue).
+    Clear {
+        sun_elevation_deg: f32,
+        sun_azimuth_deg: f32,
+        sun_radiance: f32,
+        sky_scale: f32,
+    },
+}
+
+impl Default for AnalyticSky {
+    /// A low sun, where the paper found normal mapping matters most.
+    fn default() -> Self {
+        AnalyticSky::Clear {
+            sun_elevation_deg: 4.0,
+            sun_azimuth_deg: 180.0,
+            sun_radiance: 2000.0,
+            sky_scale: 1.0,
+        }
+    }
+}
+
+/// The sky section of a scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SkyConfig {
+    /// Equirectangular EXR sky map; relative paths are taken from the config file's folder.
+    /// Without one, `analytic` lights the scene.
+    pub file: Option<PathBuf>,
+    pub analytic: AnalyticSky,
+    /// Sky dome altitude, m (the paper: 200 km); absent = at infinity.
+    pub dome_altitude_m: Option<f64>,
+    pub scale: f32,
+}
+
+impl Default for SkyConfig {
+    fn default() -> Self {
+        SkyConfig {
+            file: None,
+            analytic: AnalyticSky::default(),
+            dome_altitude_m: Some(200_000.0),
+            scale: 1.0,
+        }
+    }
+}

@@ -1,0 +1,116 @@
+//! The commands' jobs end to end, through the app layer: the files each writes and the keys of
+//! its JSON.
+
+use vastocean::app;
+use vastocean::config::{LodChoice, LodConfig, Projection, SceneConfig};
+
+fn tmp(name: &str) -> std::path::PathBuf {
+    std::env::temp_dir().join(format!("vastocean-app-{name}-{}", std::process::id()))
+}
+
+#[test]
+fn render_job_writes_exr_png_and_sidecar() {
+    let mut cfg = SceneConfig::default();
+    cfg.camera.width = 96;
+    cfg.render.spp = 2;
+    cfg.render.threads = 2;
+    let dir = tmp("render");
+    let job = app::render::RenderJob {
+        scene: cfg,
+        out: dir.join("scene"),
+        progress: false,
+    };
+    app::render::run(&job).unwrap();
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("scene.json")).unwrap()).unwrap();
+    for key in [
+        "triangles",
+        "seconds_total",
+        "seconds_build",
+        "seconds_trace",
+        "seconds_normal_map",
+        "rays",
+        "mrays_per_s",
+        "nan_count",
+        "wrong_side_count",
+        "rejected_rays",
+        "exr",
+        "png",
+    ] {
+        assert!(sidecar.get(key).is_some(), "sidecar lacks {key}");
+    }
+    assert_eq!(sidecar["nan_count"], 0);
+    assert!(sidecar["triangles"].as_u64().unwrap() > 1000);
+    let img = vastocean::image_io::read_exr(&dir.join("scene.exr")).unwrap();
+    assert_eq!((img.width, img.height), (96, 48));
+    assert!(dir.join("scene.png").metadata().unwrap().len() > 100);
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn bad_input_is_classed_as_input() {
+    let mut cfg = SceneConfig::default();
+    cfg.camera.height_m = -1.0;
+    let job = app::render::RenderJob {
+        scene: cfg,
+        out: tmp("bad").join("x"),
+        progress: false,
+    };
+    let e = app::render::run(&job).unwrap_err();
+    assert_eq!(e.exit_code(), 2, "{e}");
+    assert!(e.to_string().starts_with("camera.height_m"), "{e}");
+    assert!(!tmp("bad").exists(), "nothing written for bad input");
+}
+
+#[test]
+fn tiny_compare_runs_end_to_end_and_writes_every_file() {
+    use app::compare::Scenario;
+    let mut scene = SceneConfig::default();
+    scene.camera.width = 512;
+    scene.camera.projection = Projection::Equirect {
+        band_deg: Some((1.0, -6.0)),
+    };
+    scene.render.spp = 2;
+    scene.render.threads = 2;
+    let high = LodConfig {
+        preset: LodChoice::Custom,
+        near_size_m: Some(0.3),
+        double_distance_m: Some(18.0),
+        ..LodConfig::default()
+    };
+    let low = LodConfig {
+        preset: LodChoice::PaperLow,
+        ..LodConfig::default()
+    };
+    let dir = tmp("compare");
+    let job = app::compare::CompareJob {
+        scene,
+        high,
+        low,
+        rows_deg: (0.0, -5.0),
+        out: dir.clone(),
+        progress: false,
+    };
+    let s = app::compare::run(&job).unwrap();
+    for sc in Scenario::ALL {
+        for ext in ["exr", "png"] {
+            let f = dir.join(format!("{}.{ext}", sc.name()));
+            assert!(f.is_file(), "{} missing", f.display());
+        }
+    }
+    for f in ["stats.csv", "stats.png", "sheet.png", "summary.json"] {
+        assert!(dir.join(f).metadata().unwrap().len() > 50, "{f}");
+    }
+    // 512 px: 256 rows for 180 degrees, 0.70 degree rows; centres between 0 and -5 degrees: 7
+    assert_eq!(s.rows, 7);
+    let csv = std::fs::read_to_string(dir.join("stats.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + s.rows);
+    assert!(csv.starts_with("elevation_deg,mean_high_unmapped,std_high_unmapped,"));
+    assert!(s.std_low_unmapped > 0.0 && s.improvement_ratio.is_finite());
+    assert!(s.scenarios.iter().all(|sc| sc.nan_count == 0));
+    assert_eq!(
+        s.scenarios[0].triangles, s.scenarios[1].triangles,
+        "both high scenarios trace one mesh"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
