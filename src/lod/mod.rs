@@ -41,6 +41,7 @@
 
 mod build;
 mod earth;
+mod grid;
 
 use std::fmt;
 
@@ -325,7 +326,7 @@ pub struct LodStats {
 pub fn tessellate(params: &LodParams, sampler: &Sampler) -> Result<(Mesh, LodStats), LodError> {
     let start = std::time::Instant::now();
     params.validate()?;
-    let geo = build::Geometry::new(params)?;
+    let geo = grid::Geometry::new(params)?;
     let (mesh, per_ring) = geo.build(params, sampler)?;
     let stats = LodStats {
         triangles: mesh.triangle_count(),
@@ -348,13 +349,13 @@ pub fn count_triangles(params: &LodParams) -> usize {
 /// Triangles and vertices [`tessellate`] would build.
 pub fn try_count(params: &LodParams) -> Result<(usize, usize), LodError> {
     params.validate()?;
-    let geo = build::Geometry::new(params)?;
+    let geo = grid::Geometry::new(params)?;
     Ok(geo.count())
 }
 
 /// The rings for `params`: (size, inner half-width, outer half-width), metres.
 pub fn rings(params: &LodParams) -> Result<Vec<(f64, f64, f64)>, LodError> {
     params.validate()?;
-    let geo = build::Geometry::new(params)?;
+    let geo = grid::Geometry::new(params)?;
     Ok(geo.ring_extents())
 }

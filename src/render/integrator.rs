@@ -19,6 +19,7 @@ use serde::Serialize;
 use super::water::{fresnel, reflect, refract};
 use crate::accel::{Accel, Hit, Ray};
 use crate::config::{NormalMode, SceneConfig, Water};
+use crate::fp;
 use crate::mesh::Mesh;
 use crate::ocean::Sampler;
 use crate::rng::Rng;
@@ -167,12 +168,6 @@ pub struct SceneRef<'a> {
     pub sky: &'a Sky,
 }
 
-/// pbrt's gamma(n) = n eps / (1 - n eps) for f32 rounding.
-const fn gamma(n: f32) -> f32 {
-    let e = f32::EPSILON * 0.5;
-    n * e / (1.0 - n * e)
-}
-
 /// The surface at a hit, as shading needs it.
 struct SurfacePoint {
     p: Vec3,
@@ -188,7 +183,7 @@ fn surface_point(mesh: &Mesh, hit: &Hit) -> SurfacePoint {
     let (b1, b2) = (hit.u, hit.v);
     let b0 = 1.0 - b1 - b2;
     let p = b0 * p0 + b1 * p1 + b2 * p2;
-    let err = gamma(7.0) * (b0.abs() * p0.abs() + b1.abs() * p1.abs() + b2.abs() * p2.abs());
+    let err = fp::barycentric_error([b0, b1, b2], [p0, p1, p2]);
     let mut ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
     let nv = if mesh.normals().is_empty() {
         Vec3::Y
@@ -203,6 +198,37 @@ fn surface_point(mesh: &Mesh, hit: &Hit) -> SurfacePoint {
     }
     let offset = ng.abs().dot(err) + 1e-7 * p.abs().max_element();
     SurfacePoint { p, ng, offset }
+}
+
+/// What one hit does to a path: where it is, which way the medium changes, the attenuation of
+/// the segment that reached it, and the two directions leaving it with the Fresnel weight.
+struct Scatter {
+    sp: SurfacePoint,
+    /// The geometric normal facing the incoming ray.
+    ng: Vec3,
+    from_below: bool,
+    attenuation: Vec3,
+    fresnel: f32,
+    reflected: Vec3,
+    /// `None` on total internal reflection.
+    refracted: Option<Vec3>,
+}
+
+/// Keeps a new direction `w` on its proper side of the triangle (normal `ng`, facing the
+/// incoming ray): mirrored back across the triangle's plane when the shading normal sent it to
+/// the wrong side (see the module doc), counted.
+fn keep_side(w: Vec3, ng: Vec3, want_same_side_as_ng: bool, c: &mut Counters) -> Vec3 {
+    let s = w.dot(ng);
+    if (s > 0.0) == want_same_side_as_ng {
+        return w;
+    }
+    c.wrong_side += 1;
+    let m = w - 2.0 * s * ng;
+    if m.dot(ng) == 0.0 {
+        if want_same_side_as_ng { ng } else { -ng }
+    } else {
+        m
+    }
 }
 
 impl SceneRef<'_> {
@@ -274,7 +300,14 @@ impl SceneRef<'_> {
             };
         };
         c.hits += 1;
-        let sp = surface_point(self.accel.mesh(), &hit);
+        let s = self.scatter(d, &hit, settings, c);
+        s.attenuation * self.follow(&s, segment, settings, rng, c)
+    }
+
+    /// Shading at a hit of a ray travelling along `d`: the interface's normals, the Fresnel
+    /// weight and the reflected and refracted directions.
+    fn scatter(&self, d: Vec3, hit: &Hit, settings: &TraceSettings, c: &mut Counters) -> Scatter {
+        let sp = surface_point(self.accel.mesh(), hit);
         let from_below = d.dot(sp.ng) > 0.0;
         let attenuation = if from_below {
             settings.water.transmittance(hit.t)
@@ -283,7 +316,7 @@ impl SceneRef<'_> {
         };
 
         // Shading normal facing the incoming ray, and the geometric one likewise.
-        let mut ns = self.shading_normal(&hit, settings, c);
+        let mut ns = self.shading_normal(hit, settings, c);
         let (ng, eta_i, eta_t) = if from_below {
             (-sp.ng, settings.water.ior, 1.0)
         } else {
@@ -297,54 +330,62 @@ impl SceneRef<'_> {
             ns = ng;
         }
         let cos_i = -d.dot(ns);
-        let f = fresnel(cos_i, eta_i, eta_t);
+        let fresnel = fresnel(cos_i, eta_i, eta_t);
+        let reflected = keep_side(reflect(d, ns), ng, true, c);
+        let refracted = refract(d, ns, eta_i / eta_t).map(|t| keep_side(t, ng, false, c));
+        Scatter {
+            sp,
+            ng,
+            from_below,
+            attenuation,
+            fresnel,
+            reflected,
+            refracted,
+        }
+    }
 
-        // Keep each new direction on its proper side of the triangle (see module doc).
-        let mut keep_side = |w: Vec3, want_same_side_as_ng: bool| {
-            let s = w.dot(ng);
-            if (s > 0.0) != want_same_side_as_ng {
-                c.wrong_side += 1;
-                let m = w - 2.0 * s * ng;
-                if m.dot(ng) == 0.0 {
-                    if want_same_side_as_ng { ng } else { -ng }
-                } else {
-                    m
-                }
-            } else {
-                w
-            }
+    /// The ray leaving the hit along `w`, its origin offset to `w`'s side of the surface.
+    fn spawn(s: &Scatter, w: Vec3) -> Ray {
+        let side = if w.dot(s.ng) > 0.0 {
+            s.sp.offset
+        } else {
+            -s.sp.offset
         };
-        let r_dir = keep_side(reflect(d, ns), true);
-        let t_dir = refract(d, ns, eta_i / eta_t).map(|t| keep_side(t, false));
-        let spawn = |w: Vec3| {
-            let o = sp.p
-                + if w.dot(ng) > 0.0 {
-                    sp.offset
-                } else {
-                    -sp.offset
-                } * ng;
-            Ray::new(o.to_array(), w.to_array())
-        };
-        // After this hit, the reflected ray stays in the medium it came from; the refracted one
-        // changes medium.
-        let (r_water, t_water) = (from_below, !from_below);
+        let o = s.sp.p + side * s.ng;
+        Ray::new(o.to_array(), w.to_array())
+    }
 
-        let l = match t_dir {
-            None => self.radiance(&spawn(r_dir), r_water, segment + 1, settings, rng, c),
+    /// Radiance the hit sends back: both branches, Fresnel-weighted, up to `branch_depth`;
+    /// deeper, one branch chosen with probability F (unbiased).
+    fn follow(
+        &self,
+        s: &Scatter,
+        segment: u32,
+        settings: &TraceSettings,
+        rng: &mut Rng,
+        c: &mut Counters,
+    ) -> Vec3 {
+        // The reflected ray stays in the medium it came from; the refracted one changes it.
+        let (r_water, t_water) = (s.from_below, !s.from_below);
+        let mut trace = |w: Vec3, in_water: bool, rng: &mut Rng| {
+            self.radiance(&Self::spawn(s, w), in_water, segment + 1, settings, rng, c)
+        };
+        let f = s.fresnel;
+        match s.refracted {
+            None => trace(s.reflected, r_water, rng),
             Some(t_dir) if segment < settings.branch_depth => {
-                let lr = self.radiance(&spawn(r_dir), r_water, segment + 1, settings, rng, c);
-                let lt = self.radiance(&spawn(t_dir), t_water, segment + 1, settings, rng, c);
+                let lr = trace(s.reflected, r_water, rng);
+                let lt = trace(t_dir, t_water, rng);
                 f * lr + (1.0 - f) * lt
             }
             Some(t_dir) => {
                 if rng.f32() < f {
-                    self.radiance(&spawn(r_dir), r_water, segment + 1, settings, rng, c)
+                    trace(s.reflected, r_water, rng)
                 } else {
-                    self.radiance(&spawn(t_dir), t_water, segment + 1, settings, rng, c)
+                    trace(t_dir, t_water, rng)
                 }
             }
-        };
-        attenuation * l
+        }
     }
 }
 

@@ -1,0 +1,94 @@
+//! The BVH's memory layout: 32-byte nodes whose two children sit side by side in one 64-byte
+//! cache line, and the axis-aligned boxes the build works with.
+
+/// A node: bounds plus either two adjacent children at `index`, `index + 1` (`count == 0`) or
+/// `count` triangles starting at `index` in leaf order.
+#[repr(C, align(32))]
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Node {
+    pub(super) lo: [f32; 3],
+    pub(super) count: u32,
+    pub(super) hi: [f32; 3],
+    pub(super) index: u32,
+}
+
+const _: () = assert!(size_of::<Node>() == 32);
+
+/// Two siblings, aligned so they share one 64-byte cache line: traversal tests both children
+/// together, and a pair straddling two lines would cost a second miss per step.
+#[repr(C, align(64))]
+#[derive(Clone, Copy, Default)]
+pub(super) struct Pair(pub(super) [Node; 2]);
+
+impl Node {
+    pub(super) fn new(b: &Aabb, index: usize, count: usize) -> Node {
+        Node {
+            lo: b.lo,
+            count: count as u32,
+            hi: b.hi,
+            index: index as u32,
+        }
+    }
+}
+
+/// Minimum and maximum as single instructions: the build only sees finite coordinates (the
+/// mesh is validated), so `f32::min`'s NaN handling would be paid for nothing.
+#[inline(always)]
+fn fmin(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+#[inline(always)]
+fn fmax(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Aabb {
+    pub(super) lo: [f32; 3],
+    pub(super) hi: [f32; 3],
+}
+
+impl Aabb {
+    pub(super) const EMPTY: Aabb = Aabb {
+        lo: [f32::INFINITY; 3],
+        hi: [f32::NEG_INFINITY; 3],
+    };
+    #[inline]
+    pub(super) fn grow(&mut self, p: [f32; 3]) {
+        for ((lo, hi), c) in self.lo.iter_mut().zip(&mut self.hi).zip(p) {
+            *lo = fmin(*lo, c);
+            *hi = fmax(*hi, c);
+        }
+    }
+    #[inline]
+    pub(super) fn join(&mut self, b: &Aabb) {
+        for k in 0..3 {
+            self.lo[k] = fmin(self.lo[k], b.lo[k]);
+            self.hi[k] = fmax(self.hi[k], b.hi[k]);
+        }
+    }
+    /// Half the surface area; zero for an empty box so empty bins cost nothing.
+    #[inline]
+    pub(super) fn half_area(&self) -> f32 {
+        let d: [f32; 3] = std::array::from_fn(|k| (self.hi[k] - self.lo[k]).max(0.0));
+        d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
+    }
+    pub(super) fn centroid(&self) -> [f32; 3] {
+        std::array::from_fn(|k| 0.5 * (self.lo[k] + self.hi[k]))
+    }
+}
+
+/// Levels from the root to the deepest leaf.
+pub(super) fn tree_depth(nodes: &[Node]) -> usize {
+    let mut deepest = 0;
+    let mut todo = vec![(0usize, 1usize)];
+    while let Some((i, d)) = todo.pop() {
+        deepest = deepest.max(d);
+        let n = &nodes[i];
+        if n.count == 0 {
+            todo.push((n.index as usize, d + 1));
+            todo.push((n.index as usize + 1, d + 1));
+        }
+    }
+    deepest
+}

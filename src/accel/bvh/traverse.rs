@@ -1,0 +1,208 @@
+//! Traversal: the robust slab test of Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013 (far
+//! distances grow by `1 + 2·gamma(3)`; a zero direction component gives an infinite inverse
+//! whose NaN products are discarded, never propagated), nearest child first with a short
+//! stack, and the watertight ray/triangle test of Woop, Benthin & Wald, JCGT 2(1), 2013, with
+//! its f64 fallback for edge functions that round to zero.
+
+use super::Bvh;
+use super::layout::Node;
+use crate::accel::{Hit, Ray};
+use crate::fp::gamma;
+
+/// Traversal stack kept on the machine stack; deeper trees fall back to a heap stack.
+const INLINE_STACK: usize = 64;
+/// Ize's factor: enough to cover the rounding in `(bound - org) · inv_dir` for the far plane.
+const FAR_SCALE: f32 = 1.0 + 2.0 * gamma(3.0);
+
+/// A ray prepared for traversal: inverse direction for the slabs and Woop et al.'s
+/// permutation and shear into ray space.
+pub(super) struct Prepared {
+    org: [f32; 3],
+    inv: [f32; 3],
+    tnear: f32,
+    k: [usize; 3],
+    shear: [f32; 3],
+}
+
+impl Prepared {
+    /// `None` for a ray without a usable direction (zero or non-finite).
+    pub(super) fn new(ray: &Ray) -> Option<Prepared> {
+        let d = ray.dir;
+        if !d.iter().chain(&ray.org).all(|c| c.is_finite()) {
+            return None;
+        }
+        let a = d.map(f32::abs);
+        let kz = if a[0] > a[1] {
+            if a[0] > a[2] { 0 } else { 2 }
+        } else if a[1] > a[2] {
+            1
+        } else {
+            2
+        };
+        if d[kz] == 0.0 {
+            return None;
+        }
+        let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+        // Keeps the winding (the sign of det) independent of which axis was chosen.
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        Some(Prepared {
+            org: ray.org,
+            // Adding +0 turns -0 into +0: the inverse is then always +inf for a zero
+            // component, so the NaN from `0 · inf` on a slab plane only ever appears where the
+            // slab test below ignores it, never as a -inf far distance.
+            inv: d.map(|c| 1.0 / (c + 0.0)),
+            tnear: ray.tnear,
+            k: [kx, ky, kz],
+            shear: [d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]],
+        })
+    }
+
+    /// Entry distance into `n` if the ray meets it within `[tnear, tmax]`.
+    #[inline(always)]
+    pub(super) fn slab(&self, n: &Node, tmax: f32) -> Option<f32> {
+        let (mut t0, mut t1) = (self.tnear, tmax);
+        for k in 0..3 {
+            let mut near = (n.lo[k] - self.org[k]) * self.inv[k];
+            let mut far = (n.hi[k] - self.org[k]) * self.inv[k];
+            // A NaN compares false everywhere, so it is never swapped in as far, and the two
+            // updates below keep the running value: the ray lies in that slab plane and the
+            // axis imposes no constraint.
+            if near > far {
+                std::mem::swap(&mut near, &mut far);
+            }
+            far *= FAR_SCALE;
+            t0 = if near > t0 { near } else { t0 };
+            t1 = if far < t1 { far } else { t1 };
+        }
+        (t0 <= t1).then_some(t0)
+    }
+
+    /// Woop et al.'s watertight test: `(t, u, v)` for a hit with `tnear <= t <= tmax`.
+    #[inline(always)]
+    pub(super) fn triangle(&self, tri: &[[f32; 3]; 3], tmax: f32) -> Option<(f32, f32, f32)> {
+        let [kx, ky, kz] = self.k;
+        let [sx, sy, sz] = self.shear;
+        let rel = |p: [f32; 3]| -> [f32; 3] { std::array::from_fn(|k| p[k] - self.org[k]) };
+        let (a, b, c) = (rel(tri[0]), rel(tri[1]), rel(tri[2]));
+        let (ax, ay) = (a[kx] - sx * a[kz], a[ky] - sy * a[kz]);
+        let (bx, by) = (b[kx] - sx * b[kz], b[ky] - sy * b[kz]);
+        let (cx, cy) = (c[kx] - sx * c[kz], c[ky] - sy * c[kz]);
+        // Edge functions: e0 weighs v0, e1 v1, e2 v2. A shared edge is evaluated from the same
+        // two transformed vertices by both triangles, so the sign is consistent across it.
+        let mut e0 = cx * by - cy * bx;
+        let mut e1 = ax * cy - ay * cx;
+        let mut e2 = bx * ay - by * ax;
+        if e0 == 0.0 || e1 == 0.0 || e2 == 0.0 {
+            // A zero may be cancellation rather than a true zero; the products of two f32
+            // values are exact in f64, so this recovers the sign.
+            let f = |x: f32| x as f64;
+            e0 = (f(cx) * f(by) - f(cy) * f(bx)) as f32;
+            e1 = (f(ax) * f(cy) - f(ay) * f(cx)) as f32;
+            e2 = (f(bx) * f(ay) - f(by) * f(ax)) as f32;
+        }
+        if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
+            return None;
+        }
+        let det = e0 + e1 + e2;
+        if det == 0.0 {
+            // Parallel to the ray, or degenerate: no single hit point.
+            return None;
+        }
+        let t_scaled = e0 * (sz * a[kz]) + e1 * (sz * b[kz]) + e2 * (sz * c[kz]);
+        let inv = 1.0 / det;
+        let t = t_scaled * inv;
+        // Written so a NaN or infinite t is a miss.
+        if !(t >= self.tnear && t <= tmax && t.is_finite()) {
+            return None;
+        }
+        Some((t, e1 * inv, e2 * inv))
+    }
+}
+
+/// Woop et al.'s watertight test of one ray against one triangle, outside any BVH: `(t, u, v)`
+/// with Embree's barycentrics, or `None` for a miss, a parallel ray or a degenerate triangle.
+pub fn intersect_triangle(ray: &Ray, tri: [[f32; 3]; 3]) -> Option<(f32, f32, f32)> {
+    Prepared::new(ray)?.triangle(&tri, ray.tfar)
+}
+
+impl Bvh {
+    /// Closest hit (or with `ANY`, the first hit found) within `[tnear, tfar]`.
+    pub(super) fn traverse<const ANY: bool>(&self, ray: &Ray) -> Option<Hit> {
+        let p = Prepared::new(ray)?;
+        let mut best_t = ray.tfar;
+        let mut best: Option<(usize, f32, f32)> = None;
+        let mut inline = [(0u32, 0f32); INLINE_STACK];
+        let mut heap;
+        // At most one entry per level is pushed, so the depth bounds the stack.
+        let stack: &mut [(u32, f32)] = if self.depth < INLINE_STACK {
+            &mut inline
+        } else {
+            heap = vec![(0u32, 0f32); self.depth + 1];
+            &mut heap
+        };
+        let mut sp = 0usize;
+        p.slab(self.node(0), best_t)?;
+        let mut node = 0usize;
+        'outer: loop {
+            let n = self.node(node);
+            if n.count > 0 {
+                let first = n.index as usize;
+                for (i, tri) in self.tris[first..first + n.count as usize]
+                    .iter()
+                    .enumerate()
+                {
+                    if let Some((t, u, v)) = p.triangle(tri, best_t) {
+                        best_t = t;
+                        best = Some((first + i, u, v));
+                        if ANY {
+                            break 'outer;
+                        }
+                    }
+                }
+            } else {
+                let c = n.index as usize;
+                let [n0, n1] = &self.nodes[c / 2].0;
+                let d0 = p.slab(n0, best_t);
+                let d1 = p.slab(n1, best_t);
+                match (d0, d1) {
+                    (Some(a), Some(b)) => {
+                        let (near, far, t_far) = if a <= b { (c, c + 1, b) } else { (c + 1, c, a) };
+                        stack[sp] = (far as u32, t_far);
+                        sp += 1;
+                        node = near;
+                        continue;
+                    }
+                    (Some(_), None) => {
+                        node = c;
+                        continue;
+                    }
+                    (None, Some(_)) => {
+                        node = c + 1;
+                        continue;
+                    }
+                    (None, None) => {}
+                }
+            }
+            // Pop, skipping subtrees that start beyond the closest hit found since the push.
+            loop {
+                if sp == 0 {
+                    break 'outer;
+                }
+                sp -= 1;
+                let (next, t_entry) = stack[sp];
+                if t_entry <= best_t {
+                    node = next as usize;
+                    break;
+                }
+            }
+        }
+        best.map(|(i, u, v)| Hit {
+            t: best_t,
+            prim: self.prims[i],
+            u,
+            v,
+        })
+    }
+}

@@ -1,0 +1,80 @@
+//! `crosscheck` and `smoke`: the commands that need Embree.
+
+use anyhow::Result;
+use vastocean::app;
+use vastocean::config::LodChoice;
+
+use super::choice;
+use crate::emit;
+
+#[derive(clap::Args)]
+pub struct CrosscheckArgs {
+    /// The ocean mesh to trace (the default case-22 ocean, camera 2 m up).
+    #[arg(long, value_parser = choice::<LodChoice>(), default_value = "paper-low")]
+    lod: LodChoice,
+    /// Random rays aimed into the mesh's bounds (the camera rays of the small render come on top).
+    #[arg(long, default_value_t = 1_000_000)]
+    rays: usize,
+    /// Width of the small 360 degree render whose camera rays are traced too and which is
+    /// rendered with both backends.
+    #[arg(long, default_value_t = 256)]
+    width: usize,
+    /// Samples per pixel of the small render.
+    #[arg(long, default_value_t = 2)]
+    spp: u32,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Worker threads (0 = all cores).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn crosscheck(a: CrosscheckArgs) -> Result<()> {
+    let job = app::crosscheck::CrosscheckJob {
+        lod: a.lod,
+        rays: a.rays,
+        width: a.width,
+        spp: a.spp,
+        seed: a.seed,
+        threads: a.threads,
+    };
+    let r = app::crosscheck::run(&job)?;
+    emit(&r, a.json)?;
+    let bad = r.rays.unexplained_disagreements;
+    anyhow::ensure!(
+        bad == 0,
+        "{bad} unexplained disagreements between Embree and the Rust BVH"
+    );
+    Ok(())
+}
+
+#[derive(clap::Args)]
+pub struct SmokeArgs {
+    /// Grid cells per side (two triangles per cell).
+    #[arg(long, default_value_t = 1000)]
+    cells: u32,
+    /// Number of rays to trace.
+    #[arg(long, default_value_t = 1_000_000)]
+    rays: usize,
+    /// BVH build quality.
+    #[arg(long, value_parser = choice::<vastocean::accel::embree::Quality>(), default_value = "medium")]
+    quality: vastocean::accel::embree::Quality,
+    /// Threads for Embree and the tracer (0 = all cores).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl SmokeArgs {
+    pub fn job(&self) -> app::smoke::SmokeJob {
+        app::smoke::SmokeJob {
+            cells: self.cells,
+            rays: self.rays,
+            quality: self.quality,
+            threads: self.threads,
+        }
+    }
+}

@@ -1,0 +1,92 @@
+//! Flags (clap derive) and how each command's flags become an `app` job: one file per
+//! command group, each with its flags, their mapping onto the job and nothing else.
+
+#[cfg(feature = "embree")]
+mod embree;
+mod mesh;
+mod ocean;
+mod scene;
+mod sky;
+
+use anyhow::Result;
+use clap::builder::{PossibleValuesParser, TypedValueParser};
+use clap::{Parser, Subcommand};
+use vastocean::app;
+use vastocean::config::Choice;
+
+use crate::emit;
+
+#[derive(Parser)]
+#[command(
+    name = "vastocean",
+    version,
+    about = "Renderer for vast ocean scenes (FFT ocean layers, LOD to the horizon, Embree, normal mapping)"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// Errors in the flags themselves (exit code 2).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct BadInput(pub String);
+
+/// A flag whose values are the names of a [`Choice`] enum (listed in `--help`).
+pub(crate) fn choice<T: Choice + Clone + Send + Sync>() -> impl TypedValueParser<Value = T> {
+    PossibleValuesParser::new(T::ALL.iter().map(|v| v.name())).map(|s| {
+        s.parse::<T>()
+            .unwrap_or_else(|_| unreachable!("clap checked the name"))
+    })
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Print what this build has: versions, Embree's ISA and thread count.
+    Info {
+        /// Threads Embree may use (0 = all cores).
+        #[arg(long, default_value_t = 0)]
+        threads: usize,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Render a scene: ocean -> LOD tessellation -> BVH (Embree or Rust) -> path tracing -> EXR + PNG + JSON.
+    Render(scene::RenderArgs),
+    /// The paper's four scenarios (high/low tessellation x with/without normal mapping) and the
+    /// near-horizon statistics against the baseline.
+    Compare(scene::CompareArgs),
+    /// Trace the same rays through Embree and the pure-Rust BVH and report where they disagree;
+    /// also render a small scene with both.
+    #[cfg(feature = "embree")]
+    Crosscheck(embree::CrosscheckArgs),
+    /// Tessellate the ocean with the LOD doubling method and report (or export) the mesh.
+    Mesh(mesh::MeshArgs),
+    /// Generate the ocean layers (TMA spectrum, FFT) and report their statistics.
+    Ocean(ocean::OceanArgs),
+    /// Sky maps: generate (Preetham clear, CIE overcast, partly cloudy), import an HDR
+    /// photograph with the ground removed, report statistics, make a contact sheet.
+    #[command(subcommand)]
+    Sky(sky::SkyCommand),
+    /// Embree smoke run: build a BVH over a wavy grid and trace random rays down onto it.
+    #[cfg(feature = "embree")]
+    Smoke(embree::SmokeArgs),
+}
+
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Info { threads, json } => emit(&app::info::run(threads)?, json),
+        Command::Render(a) => emit(&app::render::run(&a.job()?)?, a.json),
+        Command::Compare(a) => emit(&app::compare::run(&a.job()?)?, a.json),
+        #[cfg(feature = "embree")]
+        Command::Crosscheck(a) => embree::crosscheck(a),
+        Command::Mesh(a) => emit(&app::mesh::run(&a.job())?, a.json),
+        Command::Ocean(a) => {
+            let r = app::ocean::run(&a.job())?;
+            r.warnings().iter().for_each(|w| eprintln!("warning: {w}"));
+            emit(&r, a.json)
+        }
+        Command::Sky(c) => sky::run(c),
+        #[cfg(feature = "embree")]
+        Command::Smoke(a) => emit(&app::smoke::run(&a.job())?, a.json),
+    }
+}

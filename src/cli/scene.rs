@@ -1,0 +1,182 @@
+//! `render` and `compare`: a scene file plus the flags that override it.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use vastocean::app::{self, AppError};
+use vastocean::config::{LodChoice, LodConfig, NormalMode, Projection, SceneConfig};
+
+use super::{BadInput, choice};
+
+/// Scene flags shared by `render` and `compare`: a scene file and the settings most often
+/// changed on the command line, which override it.
+#[derive(clap::Args)]
+pub struct SceneFlags {
+    /// Scene file (TOML); the flags below override it. Without one, the default scene.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Wind speed at 10 m, m/s.
+    #[arg(long)]
+    wind: Option<f64>,
+    /// Fetch, km.
+    #[arg(long)]
+    fetch: Option<f64>,
+    /// Water depth, m.
+    #[arg(long)]
+    depth: Option<f64>,
+    /// Scale the ocean to this RMS wave height, m.
+    #[arg(long)]
+    rms: Option<f64>,
+    /// Equirectangular EXR sky map (instead of the built-in analytic sky).
+    #[arg(long)]
+    sky: Option<PathBuf>,
+    /// Image width in pixels (the full 360 degree width for the equirectangular camera).
+    #[arg(long)]
+    width: Option<usize>,
+    /// Samples per pixel.
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Sample seed (the ocean's realization is `render.ocean_seed` in the scene file).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Camera height above the sea, m.
+    #[arg(long)]
+    camera_height: Option<f64>,
+    /// Worker threads (0 = all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// The BVH: Debian's Embree or the pure-Rust one.
+    #[arg(long, value_parser = choice::<vastocean::config::Backend>())]
+    backend: Option<vastocean::config::Backend>,
+}
+
+impl SceneFlags {
+    /// The scene file (or the default scene) with the flags applied.
+    fn scene(&self) -> Result<SceneConfig> {
+        let mut s = match &self.config {
+            Some(path) => SceneConfig::load(path).map_err(AppError::from)?,
+            None => SceneConfig::default(),
+        };
+        let set = |field: &mut f64, v: Option<f64>| v.into_iter().for_each(|v| *field = v);
+        set(&mut s.ocean.wind_speed, self.wind);
+        set(&mut s.ocean.fetch_km, self.fetch);
+        set(&mut s.ocean.depth_m, self.depth);
+        set(&mut s.camera.height_m, self.camera_height);
+        s.ocean.rms_m = self.rms.or(s.ocean.rms_m);
+        s.sky.file = self.sky.clone().or(s.sky.file);
+        s.camera.width = self.width.unwrap_or(s.camera.width);
+        s.render.spp = self.spp.unwrap_or(s.render.spp);
+        s.render.seed = self.seed.unwrap_or(s.render.seed);
+        s.render.threads = self.threads.unwrap_or(s.render.threads);
+        s.render.backend = self.backend.unwrap_or(s.render.backend);
+        Ok(s)
+    }
+}
+
+/// An elevation band TOP:BOTTOM in degrees, e.g. +1:-6.
+fn parse_band(s: &str) -> Result<(f64, f64), String> {
+    let (a, b) = s
+        .split_once(':')
+        .ok_or_else(|| format!("band {s:?} is not TOP:BOTTOM (degrees, e.g. +1:-6)"))?;
+    let num = |x: &str| {
+        x.trim()
+            .trim_start_matches('+')
+            .parse::<f64>()
+            .map_err(|e| format!("band {s:?}: {e}"))
+    };
+    Ok((num(a)?, num(b)?))
+}
+
+#[derive(clap::Args)]
+#[command(allow_negative_numbers = true)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneFlags,
+    /// Tessellation: the paper's presets, or chosen from the pixel footprint.
+    #[arg(long, value_parser = choice::<LodChoice>())]
+    lod: Option<LodChoice>,
+    /// Shading normals: interpolated vertex normals, or recomputed from the ocean (normal mapping).
+    #[arg(long, value_parser = choice::<NormalMode>())]
+    normals: Option<NormalMode>,
+    /// Render only the elevations TOP:BOTTOM in degrees, e.g. +1:-6 (equirectangular camera).
+    #[arg(long, value_parser = parse_band, allow_hyphen_values = true)]
+    band: Option<(f64, f64)>,
+    /// Output prefix: writes PREFIX.exr, PREFIX.png and PREFIX.json.
+    #[arg(long, default_value = "out/render")]
+    out: PathBuf,
+    /// Print the JSON sidecar on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl RenderArgs {
+    pub fn job(&self) -> Result<app::render::RenderJob> {
+        let mut cfg = self.scene.scene()?;
+        cfg.lod.preset = self.lod.unwrap_or(cfg.lod.preset);
+        cfg.render.normals = self.normals.unwrap_or(cfg.render.normals);
+        if let Some(b) = self.band {
+            let Projection::Equirect { .. } = cfg.camera.projection else {
+                return Err(
+                    BadInput("--band applies to the equirectangular camera only".into()).into(),
+                );
+            };
+            cfg.camera.projection = Projection::Equirect { band_deg: Some(b) };
+        }
+        Ok(app::render::RenderJob {
+            scene: cfg,
+            out: self.out.clone(),
+            progress: true,
+        })
+    }
+}
+
+#[derive(clap::Args)]
+#[command(allow_negative_numbers = true)]
+pub struct CompareArgs {
+    #[command(flatten)]
+    scene: SceneFlags,
+    /// Rendered elevations TOP:BOTTOM in degrees (default +1:-6).
+    #[arg(long, value_parser = parse_band, allow_hyphen_values = true)]
+    band: Option<(f64, f64)>,
+    /// Analysed elevations TOP:BOTTOM (the paper: 0:-5).
+    #[arg(long, value_parser = parse_band, allow_hyphen_values = true, default_value = "0:-5")]
+    rows: (f64, f64),
+    /// The high tessellation (baseline).
+    #[arg(long, value_parser = choice::<LodChoice>(), default_value = "paper-high")]
+    high: LodChoice,
+    /// The low tessellation.
+    #[arg(long, value_parser = choice::<LodChoice>(), default_value = "paper-low")]
+    low: LodChoice,
+    /// Output folder.
+    #[arg(long)]
+    out: PathBuf,
+    /// Print summary.json on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl CompareArgs {
+    pub fn job(&self) -> Result<app::compare::CompareJob> {
+        let mut scene = self.scene.scene()?;
+        let band = match (self.band, scene.camera.projection) {
+            (Some(b), _) => b,
+            (None, Projection::Equirect { band_deg: Some(b) }) => b,
+            _ => (1.0, -6.0),
+        };
+        scene.camera.projection = Projection::Equirect {
+            band_deg: Some(band),
+        };
+        let lod = |preset| LodConfig {
+            preset,
+            ..scene.lod.clone()
+        };
+        Ok(app::compare::CompareJob {
+            high: lod(self.high),
+            low: lod(self.low),
+            scene,
+            rows_deg: self.rows,
+            out: self.out.clone(),
+            progress: true,
+        })
+    }
+}
