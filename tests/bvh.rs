@@ -193,13 +193,13 @@ fn rays_parallel_on_the_surface_or_malformed_give_no_nan() {
             );
             assert!(h.t >= r.tnear);
         }
-        let _ = bvh.occluded(r);
+        // Any-hit and closest-hit traversal agree on whether there is a hit.
+        assert_eq!(bvh.occluded(r), bvh.intersect(r).is_some(), "{r:?}");
     }
-    // A ray starting on the surface and leaving it may hit it at t = 0, never behind.
-    let on = bvh
-        .intersect(&Ray::new([0.5, 0.0, 0.2], [0.0, -1.0, 0.0]))
-        .map(|h| h.t);
-    assert!(on.is_none_or(|t| t == 0.0), "{on:?}");
+    // A ray starting on the surface and leaving it does not hit it again: t = 0 is within
+    // rounding error of zero (pbrt's conservative t check).
+    let on = bvh.intersect(&Ray::new([0.5, 0.0, 0.2], [0.0, -1.0, 0.0]));
+    assert!(on.is_none(), "{on:?}");
     let never = [
         Ray::new([0.5, 1.0, 0.5], [0.0, 0.0, 0.0]), // no direction
         Ray::new([0.5, 1.0, 0.5], [f32::NAN, -1.0, 0.0]), // NaN direction

@@ -73,6 +73,17 @@ pub fn judge(
     hit: Option<vastocean::accel::Hit>,
     rel_t: f64,
 ) -> Verdict {
+    // The nearest hit is one pass over the triangles; only a disagreement needs them all.
+    let nearest = oracle.nearest(ray);
+    match (hit, nearest) {
+        (None, None) => return Verdict::Same,
+        (Some(h), Some((t, p, _, _)))
+            if h.prim == p && ((h.t as f64 - t).abs() <= rel_t * t.abs().max(1e-3)) =>
+        {
+            return Verdict::Same;
+        }
+        _ => {}
+    }
     let all = oracle.all_hits(ray);
     // Within 1e-4 (barycentric) of the triangle's boundary, inside or outside: a hit or miss
     // there may legitimately go either way in f32. A line that misses the triangle by more is

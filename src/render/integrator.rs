@@ -11,7 +11,8 @@
 //! ray is mirrored back across the triangle's plane, and each case is counted.
 //!
 //! Secondary rays leave the surface offset along the geometric normal by a bound on the hit
-//! point's floating-point error (pbrt-v4, section 6.8.6), not by a fixed epsilon.
+//! point's floating-point error, rounded away from the surface (pbrt-v4, section 6.8.6;
+//! [`crate::fp::offset_ray_origin`]), not by a fixed epsilon.
 
 use glam::Vec3;
 use serde::Serialize;
@@ -173,8 +174,8 @@ struct SurfacePoint {
     p: Vec3,
     /// Geometric normal, oriented to the air side (agreeing with the vertex normals).
     ng: Vec3,
-    /// Offset distance that clears the hit's rounding error.
-    offset: f32,
+    /// Bound on the rounding error of `p`, per component.
+    err: Vec3,
 }
 
 fn surface_point(mesh: &Mesh, hit: &Hit) -> SurfacePoint {
@@ -183,7 +184,12 @@ fn surface_point(mesh: &Mesh, hit: &Hit) -> SurfacePoint {
     let (b1, b2) = (hit.u, hit.v);
     let b0 = 1.0 - b1 - b2;
     let p = b0 * p0 + b1 * p1 + b2 * p2;
-    let err = fp::barycentric_error([b0, b1, b2], [p0, p1, p2]);
+    // The interpolated point's own error bound, plus the error of the backend evaluating the
+    // triangle's plane at the ray origin in f32, which scales with the coordinates' magnitude
+    // in every direction (a flat sea has no error in y from interpolation, yet Embree, which
+    // has no conservative t check like pbrt's, can find t = 0 on its own plane).
+    let err = fp::barycentric_error([b0, b1, b2], [p0, p1, p2])
+        + Vec3::splat(fp::gamma(3.0) * p.abs().max_element());
     let mut ng = (p1 - p0).cross(p2 - p0).normalize_or_zero();
     let nv = if mesh.normals().is_empty() {
         Vec3::Y
@@ -196,16 +202,29 @@ fn surface_point(mesh: &Mesh, hit: &Hit) -> SurfacePoint {
     if ng == Vec3::ZERO {
         ng = nv.normalize_or(Vec3::Y);
     }
-    let offset = ng.abs().dot(err) + 1e-7 * p.abs().max_element();
-    SurfacePoint { p, ng, offset }
+    SurfacePoint { p, ng, err }
+}
+
+impl SurfacePoint {
+    /// The ray leaving the surface along `w`, its origin moved just far enough to `w`'s side
+    /// to clear the hit's rounding error (pbrt-v4's OffsetRayOrigin), so it cannot meet its own
+    /// triangle again.
+    fn spawn(&self, w: Vec3) -> Ray {
+        let o = fp::offset_ray_origin(self.p, self.err, self.ng, w);
+        Ray::new(o.to_array(), w.to_array())
+    }
+}
+
+/// The ray leaving the surface of `mesh` at `hit` along `w`, as the integrator spawns its
+/// secondary rays (for tests and cross-checks).
+pub fn spawn_ray(mesh: &Mesh, hit: &Hit, w: Vec3) -> Ray {
+    surface_point(mesh, hit).spawn(w)
 }
 
 /// What one hit does to a path: where it is, which way the medium changes, the attenuation of
 /// the segment that reached it, and the two directions leaving it with the Fresnel weight.
 struct Scatter {
     sp: SurfacePoint,
-    /// The geometric normal facing the incoming ray.
-    ng: Vec3,
     from_below: bool,
     attenuation: Vec3,
     fresnel: f32,
@@ -335,24 +354,12 @@ impl SceneRef<'_> {
         let refracted = refract(d, ns, eta_i / eta_t).map(|t| keep_side(t, ng, false, c));
         Scatter {
             sp,
-            ng,
             from_below,
             attenuation,
             fresnel,
             reflected,
             refracted,
         }
-    }
-
-    /// The ray leaving the hit along `w`, its origin offset to `w`'s side of the surface.
-    fn spawn(s: &Scatter, w: Vec3) -> Ray {
-        let side = if w.dot(s.ng) > 0.0 {
-            s.sp.offset
-        } else {
-            -s.sp.offset
-        };
-        let o = s.sp.p + side * s.ng;
-        Ray::new(o.to_array(), w.to_array())
     }
 
     /// Radiance the hit sends back: both branches, Fresnel-weighted, up to `branch_depth`;
@@ -368,7 +375,7 @@ impl SceneRef<'_> {
         // The reflected ray stays in the medium it came from; the refracted one changes it.
         let (r_water, t_water) = (s.from_below, !s.from_below);
         let mut trace = |w: Vec3, in_water: bool, rng: &mut Rng| {
-            self.radiance(&Self::spawn(s, w), in_water, segment + 1, settings, rng, c)
+            self.radiance(&s.sp.spawn(w), in_water, segment + 1, settings, rng, c)
         };
         let f = s.fresnel;
         match s.refracted {

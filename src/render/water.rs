@@ -87,4 +87,32 @@ mod tests {
         let up = Vec3::new(60f32.to_radians().sin(), 60f32.to_radians().cos(), 0.0);
         assert!(refract(up, -Vec3::Y, 1.333).is_none());
     }
+
+    proptest::proptest! {
+        /// Reflectance is a fraction; the same interface seen from the other side along the
+        /// refracted direction reflects the same fraction (reciprocity of the unpolarised
+        /// Fresnel equations); and `fresnel` reports total internal reflection exactly when
+        /// `refract` finds no refracted direction.
+        #[test]
+        fn fresnel_is_bounded_reciprocal_and_agrees_with_refract(
+            cos_i in 0.0f32..=1.0,
+            ior in 1.0f32..2.5,
+            from_dense in proptest::bool::ANY,
+        ) {
+            let (eta_i, eta_t) = if from_dense { (ior, 1.0) } else { (1.0, ior) };
+            let f = fresnel(cos_i, eta_i, eta_t);
+            proptest::prop_assert!((0.0..=1.0).contains(&f), "F = {f}");
+            let sin_i = (1.0 - cos_i * cos_i).max(0.0).sqrt();
+            let d = Vec3::new(sin_i, -cos_i, 0.0);
+            let t = refract(d, Vec3::Y, eta_i / eta_t);
+            // (F also reaches 1 at exactly grazing incidence, where light still refracts.)
+            proptest::prop_assert_eq!(f == 1.0, t.is_none() || cos_i == 0.0, "cos_i {} F {}", cos_i, f);
+            // Reciprocity; near grazing, f32 keeps too few digits of cos for a tight check.
+            if let Some(t) = t.filter(|_| cos_i > 0.05) {
+                let cos_t = -t.y;
+                let back = fresnel(cos_t, eta_t, eta_i);
+                proptest::prop_assert!((back - f).abs() < 2e-4, "F {f} vs reverse {back}");
+            }
+        }
+    }
 }

@@ -2,7 +2,8 @@
 //! distances grow by `1 + 2·gamma(3)`; a zero direction component gives an infinite inverse
 //! whose NaN products are discarded, never propagated), nearest child first with a short
 //! stack, and the watertight ray/triangle test of Woop, Benthin & Wald, JCGT 2(1), 2013, with
-//! its f64 fallback for edge functions that round to zero.
+//! its f64 fallback for edge functions that round to zero and pbrt-v4's conservative bound that
+//! refuses hits whose t rounding cannot tell from zero.
 
 use super::Bvh;
 use super::layout::Node;
@@ -18,6 +19,7 @@ const FAR_SCALE: f32 = 1.0 + 2.0 * gamma(3.0);
 /// permutation and shear into ray space.
 pub(super) struct Prepared {
     org: [f32; 3],
+    dir: [f32; 3],
     inv: [f32; 3],
     tnear: f32,
     k: [usize; 3],
@@ -49,6 +51,7 @@ impl Prepared {
         }
         Some(Prepared {
             org: ray.org,
+            dir: d,
             // Adding +0 turns -0 into +0: the inverse is then always +inf for a zero
             // component, so the NaN from `0 · inf` on a slab plane only ever appears where the
             // slab test below ignores it, never as a -inf far distance.
@@ -117,7 +120,107 @@ impl Prepared {
         if !(t >= self.tnear && t <= tmax && t.is_finite()) {
             return None;
         }
+        // pbrt-v4's conservative check (Triangle::Intersect): a t that rounding error cannot
+        // tell from zero is refused, so a ray that leaves this very triangle never hits it.
+        // Its f32 bound grows with the distance along the ray: for a grazing hit kilometres
+        // away on a large triangle it can exceed t itself. Such inconclusive cases are settled
+        // by the same bound in f64, whose rounding is 2^29 times smaller.
+        if t <= self.zero_t_bound::<f32>(tri) && t <= self.zero_t_bound::<f64>(tri) {
+            return None;
+        }
         Some((t, e1 * inv, e2 * inv))
+    }
+}
+
+/// The arithmetic the conservative t bound is evaluated in.
+pub(super) trait Real:
+    Copy
+    + PartialOrd
+    + std::ops::Add<Output = Self>
+    + std::ops::Sub<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::ops::Div<Output = Self>
+{
+    fn of(x: f32) -> Self;
+    fn abs(self) -> Self;
+    /// pbrt's gamma(n) for this type's unit roundoff.
+    fn gamma(n: u8) -> Self;
+    fn to_f32(self) -> f32;
+}
+
+impl Real for f32 {
+    fn of(x: f32) -> f32 {
+        x
+    }
+    fn abs(self) -> f32 {
+        f32::abs(self)
+    }
+    fn gamma(n: u8) -> f32 {
+        gamma(n as f32)
+    }
+    fn to_f32(self) -> f32 {
+        self
+    }
+}
+
+impl Real for f64 {
+    fn of(x: f32) -> f64 {
+        x as f64
+    }
+    fn abs(self) -> f64 {
+        f64::abs(self)
+    }
+    fn gamma(n: u8) -> f64 {
+        let u = f64::EPSILON * 0.5;
+        n as f64 * u / (1.0 - n as f64 * u)
+    }
+    fn to_f32(self) -> f32 {
+        // Rounded up, so the bound stays a bound.
+        let f = self as f32;
+        if (f as f64) < self { f.next_up() } else { f }
+    }
+}
+
+impl Prepared {
+    /// pbrt-v4's bound on the error of the intersection's t, computed in `R` from the
+    /// triangle's corners relative to the ray origin (exact in f64): a computed t at or below it
+    /// may stand for a true t of zero.
+    #[inline(never)]
+    fn zero_t_bound<R: Real>(&self, tri: &[[f32; 3]; 3]) -> f32 {
+        let [kx, ky, kz] = self.k;
+        let (sx, sy, sz) = (
+            R::of(self.dir[kx]) / R::of(self.dir[kz]),
+            R::of(self.dir[ky]) / R::of(self.dir[kz]),
+            R::of(1.0) / R::of(self.dir[kz]),
+        );
+        let p = tri.map(|v| {
+            let rel = |k: usize| R::of(v[k]) - R::of(self.org[k]);
+            let (x, y, z) = (rel(kx), rel(ky), rel(kz));
+            (x - sx * z, y - sy * z, sz * z)
+        });
+        let e = [
+            p[2].0 * p[1].1 - p[2].1 * p[1].0,
+            p[0].0 * p[2].1 - p[0].1 * p[2].0,
+            p[1].0 * p[0].1 - p[1].1 * p[0].0,
+        ];
+        let max3 = |q: R, r: R, s: R| {
+            let (q, r, s) = (q.abs(), r.abs(), s.abs());
+            let m = if q > r { q } else { r };
+            if m > s { m } else { s }
+        };
+        let max_xt = max3(p[0].0, p[1].0, p[2].0);
+        let max_yt = max3(p[0].1, p[1].1, p[2].1);
+        let max_zt = max3(p[0].2, p[1].2, p[2].2);
+        let max_e = max3(e[0], e[1], e[2]);
+        let det = (e[0] + e[1] + e[2]).abs();
+        let two = R::of(2.0);
+        let delta_z = R::gamma(3) * max_zt;
+        let delta_x = R::gamma(5) * (max_xt + max_zt);
+        let delta_y = R::gamma(5) * (max_yt + max_zt);
+        let delta_e = two * (R::gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+        let bound =
+            R::of(3.0) * (R::gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) / det;
+        bound.to_f32()
     }
 }
 
