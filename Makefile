@@ -29,9 +29,12 @@ build: setup
 run: build
 	./target/release/vastocean render --sky skies/clear-sun03.exr --out $(OUT)/default
 
+# The suite with Embree, then again on the pure-Rust backend alone; the benches are compiled
+# (they must not rot) but not run: timing is `make bench`'s job.
 test: setup
-	$(CARGO) test --all-targets -- --quiet
-	$(CARGO) test --no-default-features --lib -- --quiet
+	$(CARGO) test --lib --tests -- --quiet
+	$(CARGO) test --benches --no-run
+	$(CARGO) test --no-default-features --lib --tests -- --quiet
 
 # Heavy cases (#[ignore]) on top of the default suite.
 test-full: test
