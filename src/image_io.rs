@@ -165,6 +165,65 @@ pub fn write_exr(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
     })?)
 }
 
+/// Writes a linear-RGB EXR (32-bit float, ZIP) with further f32 channels, e.g. `Y.variance`.
+pub fn write_exr_with(
+    path: &Path,
+    img: &RgbImage,
+    extra: &[(&str, &[f32])],
+) -> Result<(), ImageError> {
+    use exr::prelude::*;
+    let n = img.width * img.height;
+    let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = ["R", "G", "B"]
+        .iter()
+        .enumerate()
+        .map(|(k, name)| {
+            let samples = img.pixels.iter().map(|p| p[k]).collect();
+            AnyChannel::new(*name, FlatSamples::F32(samples))
+        })
+        .collect();
+    for (name, values) in extra {
+        assert_eq!(values.len(), n, "one value per pixel for channel {name}");
+        list.push(AnyChannel::new(*name, FlatSamples::F32(values.to_vec())));
+    }
+    let mut layer = Layer::new(
+        (img.width, img.height),
+        LayerAttributes::default(),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(list),
+    );
+    layer.encoding.compression = Compression::ZIP16;
+    let image = Image::from_layer(layer);
+    Ok(write_atomically(path, |w| {
+        image
+            .write()
+            .to_buffered(w)
+            .map_err(|e| std::io::Error::other(e.to_string()))
+    })?)
+}
+
+/// Reads one f32 channel of the first layer of an EXR file, row-major.
+pub fn read_exr_channel(path: &Path, name: &str) -> Result<Vec<f32>, ImageError> {
+    use exr::prelude::*;
+    let image = read_all_flat_layers_from_file(path).map_err(|e| ImageError::Read {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    let channel = image
+        .layer_data
+        .first()
+        .and_then(|l| {
+            l.channel_data
+                .list
+                .iter()
+                .find(|c| c.name.to_string() == name)
+        })
+        .ok_or_else(|| ImageError::Invalid {
+            path: path.to_path_buf(),
+            message: format!("no channel {name}"),
+        })?;
+    Ok(channel.sample_data.values_as_f32().collect())
+}
+
 /// Reads the RGB channels of the first layer of an EXR file as linear f32.
 pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
     use exr::prelude::*;

@@ -107,6 +107,34 @@ fn tiny_compare_runs_end_to_end_and_writes_every_file() {
     assert_eq!(csv.lines().count(), 1 + s.rows);
     assert!(csv.starts_with("elevation_deg,mean_high_unmapped,std_high_unmapped,"));
     assert!(s.std_low_unmapped > 0.0 && s.improvement_ratio.is_finite());
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    for key in [
+        "std_high_unmapped_corrected",
+        "std_low_mapped_corrected",
+        "std_low_unmapped_corrected",
+        "improvement_ratio_corrected",
+        "improvement_ratio_ci",
+        "improvement_significant",
+        "improvement_ratio_median_rows",
+        "noise_model_check",
+        "estimates",
+    ] {
+        assert!(summary.get(key).is_some(), "summary.json lacks {key}");
+    }
+    let ci = &summary["improvement_ratio_ci"];
+    assert!(ci[0].as_f64().unwrap() <= ci[1].as_f64().unwrap());
+    for sc in summary["estimates"]["scenarios"].as_array().unwrap() {
+        for key in ["trend_std", "residual_std", "std_corrected", "rows"] {
+            assert!(sc.get(key).is_some(), "scenario estimate lacks {key}");
+        }
+    }
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .contains("std_corrected_lo_low_mapped")
+    );
     assert!(s.scenarios.iter().all(|sc| sc.nan_count == 0));
     assert_eq!(
         s.scenarios[0].triangles, s.scenarios[1].triangles,

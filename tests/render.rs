@@ -4,6 +4,7 @@
 
 use glam::Vec3;
 use vastocean::accel::{Accel, Ray};
+use vastocean::config::WrongSide;
 use vastocean::image_io::RgbImage;
 use vastocean::mesh::Mesh;
 use vastocean::ocean::{LayerSpec, OceanParams, Sampler, Surface};
@@ -98,23 +99,33 @@ fn white_furnace_every_pixel_equals_the_sky() {
     let sampler = ocean.sampler([0.0, 0.0]);
     let l = [0.5f32, 0.7, 1.0];
     let sky = Sky::analytic(AnalyticSky::Uniform { radiance: l });
-    // R_rs = 1/pi under a uniform sky of irradiance pi L gives a water-leaving radiance of L.
+    // Under a uniform sky of irradiance pi L, R_rs = (1 - F(0)) / pi makes the upwelling
+    // radiance below the surface L itself (see Water::upwelling).
+    let f0 = fresnel(1.0, 1.0, Water::default().ior);
     let water = Water {
         absorption: [0.0; 3],
-        upwelling_rrs: [std::f32::consts::FRAC_1_PI; 3],
+        upwelling_rrs: [(1.0 - f0) * std::f32::consts::FRAC_1_PI; 3],
         ..Water::default()
     };
     let upwelling = water.upwelling(sky.irradiance()).to_array();
     for accel in crate::common::backends(ocean_grid(&sampler, 60.0, 0.5)) {
         let scene = scene_ref(accel.as_ref(), sampler, 6_371_000.0, &sky);
-        for normals in [NormalMode::Vertex, NormalMode::Mapped] {
+        // Every policy that keeps the weight of a wrong-side direction conserves energy.
+        for (normals, wrong_side) in [
+            (NormalMode::Vertex, WrongSide::Mirror),
+            (NormalMode::Mapped, WrongSide::Mirror),
+            (NormalMode::Mapped, WrongSide::Flip),
+            (NormalMode::Mapped, WrongSide::Bend),
+        ] {
             let settings = TraceSettings {
                 normals,
                 water,
+                wrong_side,
                 upwelling,
                 ..TraceSettings::default()
             };
-            let (img, c) = render_image(&scene, &equirect(64, None), 2.0, 4, 1, &settings, false);
+            let (film, c) = render_image(&scene, &equirect(64, None), 2.0, 4, 1, &settings, false);
+            let img = film.image;
             assert!(c.hits > 1000, "the sea must be hit: {c:?}");
             let worst = img
                 .pixels
@@ -128,7 +139,7 @@ fn white_furnace_every_pixel_equals_the_sky() {
             // Only paths cut at 10 segments lose energy; they are rare.
             assert!(
                 worst < 0.01,
-                "{} {normals:?}: worst relative error {worst}, truncated {}",
+                "{} {normals:?} {wrong_side:?}: worst relative error {worst}, truncated {}",
                 accel.name(),
                 c.truncated
             );
@@ -153,7 +164,9 @@ fn flat_sea_matches_the_fresnel_weighted_mirror_lookup() {
             ..TraceSettings::default()
         };
         let cam = equirect(128, Some((-2.0, -60.0)));
-        let (img, _) = render_image(&scene, &cam, 2.0, 64, 3, &settings, false);
+        let img = render_image(&scene, &cam, 2.0, 64, 3, &settings, false)
+            .0
+            .image;
         let sky_at = |d: Vec3| Vec3::from(horizon).lerp(Vec3::from(zenith), d.y.clamp(0.0, 1.0));
         let mut worst = 0f32;
         for y in 0..cam.height {
@@ -270,6 +283,7 @@ fn vertex_and_mapped_differ_on_a_coarse_mesh_and_agree_on_a_fine_one() {
                 false,
             )
             .0
+            .image
         };
         mean_abs_luminance_difference(&render(NormalMode::Vertex), &render(NormalMode::Mapped))
     };
@@ -310,6 +324,10 @@ fn render_is_bit_identical_for_one_and_two_threads() {
         let (a, ca) = render(1);
         let (b, cb) = render(2);
         assert_eq!(ca.rays, cb.rays);
+        // Every output of the film, not only the image, is thread-count free.
+        assert_eq!(a.var_y, b.var_y);
+        assert_eq!(a.halves, b.halves);
+        let (a, b) = (a.image, b.image);
         assert!(
             a.pixels
                 .iter()
@@ -350,6 +368,7 @@ fn skipping_rays_that_cannot_return_changes_no_pixel() {
     };
     let (a, ca) = render(None);
     let (b, cb) = render(Some(slope));
+    let (a, b) = (a.image, b.image);
     assert!(
         cb.skipped > 1000 && cb.rays + cb.skipped == ca.rays,
         "{ca:?} {cb:?}"
@@ -420,6 +439,7 @@ fn grazing_rays_at_the_horizon_give_no_nan() {
         &TraceSettings::default(),
         false,
     );
+    let img = img.image;
     assert_eq!(c.nan, 0, "{c:?}");
     assert!(
         img.pixels

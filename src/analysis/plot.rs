@@ -1,6 +1,7 @@
 //! Pictures of a comparison, drawn with plotters: the statistics plot (the paper's Figure 5:
-//! azimuth-averaged mean and standard deviation of the luminance difference against elevation;
-//! green = high unmapped, blue = low mapped, yellow = low unmapped, grey = noise floor) and the
+//! azimuth-averaged mean and standard deviation of the luminance difference against elevation,
+//! the latter noise-corrected with its 95 % interval; green = high unmapped, blue = low mapped,
+//! yellow = low unmapped, grey = noise floor) and the
 //! contact sheet of the four renders (the paper's Figure 4). Text is drawn with ab_glyph from
 //! Debian's DejaVu Sans (package fonts-dejavu-core, installed by `make setup`).
 
@@ -10,7 +11,7 @@ use std::sync::OnceLock;
 use plotters::prelude::*;
 use plotters::style::{FontStyle, register_font};
 
-use super::RowStat;
+use super::error::{RowEstimate, ScenarioEstimate};
 use crate::image_io::{RgbImage, tonemap, write_png_rgb8};
 
 const FONT_PATHS: [&str; 2] = [
@@ -48,7 +49,8 @@ fn draw_png(
     write_png_rgb8(path, size.0, size.1, &buf).map_err(|e| e.to_string())
 }
 
-/// Scenario curves in `stats` order (high unmapped, low mapped, low unmapped, noise floor).
+/// Scenario curves in the order of the estimates (high unmapped, low mapped, low unmapped,
+/// noise floor): the paper's Figure 5 colours.
 const CURVES: [(&str, RGBColor); 4] = [
     ("high tessellation, unmapped", RGBColor(0, 160, 60)),
     ("low tessellation, mapped", RGBColor(30, 80, 220)),
@@ -59,21 +61,38 @@ const CURVES: [(&str, RGBColor); 4] = [
     ),
 ];
 
-/// Two panels: mean and standard deviation of Y(scenario) - Y(baseline) against elevation.
-pub fn stats_plot(path: &Path, stats: &[Vec<RowStat>], rows_deg: (f64, f64)) -> Result<(), String> {
+/// Two panels against elevation: the mean of Y(scenario) - Y(baseline), and its standard
+/// deviation: noise-corrected (solid) inside its 95 % interval (shaded), and the paper's
+/// statistic with the noise in it (thin).
+pub fn stats_plot(
+    path: &Path,
+    scenarios: &[ScenarioEstimate],
+    rows_deg: (f64, f64),
+) -> Result<(), String> {
     draw_png(path, (1400, 560), |root| {
         let e = |e: DrawingAreaErrorKind<_>| e.to_string();
         root.fill(&WHITE).map_err(e)?;
         let (left, right) = root.split_horizontally(700);
         for (panel, title, pick) in [
             (left, "mean of luminance difference", 0usize),
-            (right, "standard deviation of luminance difference", 1),
+            (
+                right,
+                "std of luminance difference (solid: noise-corrected, 95% band; thin: with noise)",
+                1,
+            ),
         ] {
-            let value = |r: &RowStat| if pick == 0 { r.mean } else { r.std };
-            let (mut lo, mut hi) = stats
+            let values = |r: &RowEstimate| -> Vec<f64> {
+                if pick == 0 {
+                    vec![r.mean]
+                } else {
+                    vec![r.std, r.std_corrected_ci[0], r.std_corrected_ci[1]]
+                }
+            };
+            let (mut lo, mut hi) = scenarios
                 .iter()
-                .flatten()
-                .map(value)
+                .flat_map(|s| &s.rows)
+                .flat_map(values)
+                .filter(|v| v.is_finite())
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
                     (a.min(v), b.max(v))
                 });
@@ -88,7 +107,7 @@ pub fn stats_plot(path: &Path, stats: &[Vec<RowStat>], rows_deg: (f64, f64)) -> 
             }
             let pad = 0.05 * (hi - lo);
             let mut chart = ChartBuilder::on(&panel)
-                .caption(title, ("sans-serif", 22))
+                .caption(title, ("sans-serif", if pick == 0 { 22 } else { 15 }))
                 .margin(12)
                 .x_label_area_size(44)
                 .y_label_area_size(80)
@@ -105,10 +124,32 @@ pub fn stats_plot(path: &Path, stats: &[Vec<RowStat>], rows_deg: (f64, f64)) -> 
                 .axis_desc_style(("sans-serif", 16))
                 .draw()
                 .map_err(e)?;
-            for (rows, (label, color)) in stats.iter().zip(CURVES) {
+            for (sc, (label, color)) in scenarios.iter().zip(CURVES) {
+                let rows = &sc.rows;
+                if pick == 1 {
+                    let band: Vec<(f64, f64)> = rows
+                        .iter()
+                        .map(|r| (r.elevation_deg, r.std_corrected_ci[1]))
+                        .chain(
+                            rows.iter()
+                                .rev()
+                                .map(|r| (r.elevation_deg, r.std_corrected_ci[0])),
+                        )
+                        .collect();
+                    chart
+                        .draw_series(std::iter::once(Polygon::new(band, color.mix(0.2).filled())))
+                        .map_err(e)?;
+                    chart
+                        .draw_series(LineSeries::new(
+                            rows.iter().map(|r| (r.elevation_deg, r.std)),
+                            color.mix(0.6).stroke_width(1),
+                        ))
+                        .map_err(e)?;
+                }
+                let y = |r: &RowEstimate| if pick == 0 { r.mean } else { r.std_corrected };
                 chart
                     .draw_series(LineSeries::new(
-                        rows.iter().map(|r| (r.elevation_deg, value(r))),
+                        rows.iter().map(|r| (r.elevation_deg, y(r))),
                         color.stroke_width(2),
                     ))
                     .map_err(e)?

@@ -11,9 +11,12 @@ use std::time::Instant;
 use serde::Serialize;
 
 use super::AppError;
-use crate::analysis::{RowStat, band_average, plot, row_difference_stats};
+use crate::analysis::error::{
+    EstimateError, Estimates, Estimator, Inputs, Interval, RatioEstimate,
+};
+use crate::analysis::plot;
 use crate::config::{LodConfig, NormalMode, Projection, SceneConfig};
-use crate::image_io::{auto_exposure, write_atomically, write_exr, write_json, write_png};
+use crate::image_io::{auto_exposure, write_atomically, write_exr_with, write_json, write_png};
 use crate::render::pipeline::{Rendered, prepare};
 
 /// What to compare: one scene (ocean, sky, camera, samples) and the two tessellations.
@@ -101,9 +104,12 @@ pub struct ScenarioInfo {
     pub png: PathBuf,
 }
 
-/// `summary.json`: band averages, the improvement ratio and what each scenario cost.
+/// `summary.json`: band averages (the paper's, and noise-corrected with 95 % intervals), the
+/// improvement ratio and its verdict, and what each scenario cost.
 #[derive(Clone, Debug, Serialize)]
 pub struct CompareSummary {
+    /// The paper's statistic: band average of the rows' std of Y(scenario) - Y(baseline),
+    /// Monte Carlo noise included.
     pub std_high_unmapped: f64,
     pub std_low_mapped: f64,
     pub std_low_unmapped: f64,
@@ -112,11 +118,34 @@ pub struct CompareSummary {
     pub mean_low_mapped: f64,
     pub mean_low_unmapped: f64,
     pub mean_noise_floor: f64,
-    /// std(low unmapped) / std(low mapped): how much normal mapping brings the low tessellation
-    /// closer to the baseline (the paper: 5 to 10 for its case 87).
+    /// std(low unmapped) / std(low mapped) of the paper's statistic (the paper: 5 to 10 for
+    /// its case 87).
     pub improvement_ratio: f64,
+    /// The same statistics with the noise taken out (see `crate::analysis::error`).
+    pub std_high_unmapped_corrected: f64,
+    pub std_low_mapped_corrected: f64,
+    pub std_low_unmapped_corrected: f64,
+    pub std_noise_floor_corrected: f64,
+    pub improvement_ratio_corrected: f64,
+    pub improvement_ratio_ci: [f64; 2],
+    /// The interval excludes 1.
+    pub improvement_significant: bool,
+    pub improvement_ratio_median_rows: f64,
+    pub improvement_ratio_without_glint: f64,
+    /// When not significant: the spp that would resolve it, if more samples can.
+    pub improvement_spp_to_resolve: Option<u64>,
+    /// Of the trend and of the residual detail.
+    pub improvement_ratio_trend: Interval,
+    pub improvement_ratio_residual: Interval,
+    /// The noise floor's measured over predicted variance: about 1 if the noise model holds.
+    pub noise_model_check: Interval,
     pub rows: usize,
     pub rows_deg: (f64, f64),
+    pub spp: u32,
+    pub wrong_side: crate::config::WrongSide,
+    /// Every scenario against the baseline: per-row and band estimates with intervals.
+    pub estimates: Estimates,
+    pub improvement: RatioEstimate,
     pub scenarios: Vec<ScenarioInfo>,
     pub seconds_total: f64,
     pub stats_csv: PathBuf,
@@ -202,19 +231,41 @@ fn render_scenarios(job: &CompareJob) -> Result<Vec<(ScenarioInfo, Rendered)>, A
     Ok(out)
 }
 
-/// `stats.csv`: one line per analysed row, mean and std of each scenario's difference.
-fn write_stats_csv(path: &Path, stats: &[Vec<RowStat>]) -> Result<(), AppError> {
+/// `stats.csv`: one line per analysed row; per scenario the paper's mean and std (the
+/// columns of earlier versions, first), then the noise, the corrected std with its interval and
+/// whether the row is a glint outlier.
+fn write_stats_csv(path: &Path, e: &Estimates) -> Result<(), AppError> {
     Ok(write_atomically(path, |w| {
         use std::io::Write;
         write!(w, "elevation_deg")?;
-        for sc in &Scenario::ALL[1..] {
-            write!(w, ",mean_{0},std_{0}", sc.name())?;
+        for sc in &e.scenarios {
+            write!(w, ",mean_{0},std_{0}", sc.name)?;
+        }
+        for sc in &e.scenarios {
+            write!(
+                w,
+                ",noise_{0},std_corrected_{0},std_corrected_lo_{0},std_corrected_hi_{0},glint_{0}",
+                sc.name
+            )?;
         }
         writeln!(w)?;
-        for i in 0..stats[0].len() {
-            write!(w, "{:.6}", stats[0][i].elevation_deg)?;
-            for s in stats {
-                write!(w, ",{:.9},{:.9}", s[i].mean, s[i].std)?;
+        for i in 0..e.rows {
+            write!(w, "{:.6}", e.scenarios[0].rows[i].elevation_deg)?;
+            for sc in &e.scenarios {
+                let r = &sc.rows[i];
+                write!(w, ",{:.9},{:.9}", r.mean, r.std)?;
+            }
+            for sc in &e.scenarios {
+                let r = &sc.rows[i];
+                write!(
+                    w,
+                    ",{:.9},{:.9},{:.9},{:.9},{}",
+                    r.noise,
+                    r.std_corrected,
+                    r.std_corrected_ci[0],
+                    r.std_corrected_ci[1],
+                    u8::from(r.glint)
+                )?;
             }
             writeln!(w)?;
         }
@@ -230,25 +281,32 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
     let (top, bottom) = job.rows_deg;
 
     // One exposure for all, so the sheet compares like with like.
-    let exposure = auto_exposure(&runs[0].1.image);
+    let exposure = auto_exposure(&runs[0].1.film.image);
     for (info, r) in &runs {
-        write_exr(&info.exr, &r.image)?;
-        write_png(&info.png, &r.image, exposure)?;
+        write_exr_with(&info.exr, &r.film.image, &[("Y.variance", &r.film.var_y)])?;
+        write_png(&info.png, &r.film.image, exposure)?;
     }
 
-    let camera = &runs[0].1.camera;
-    let base = &runs[0].1.image;
-    let stats: Vec<Vec<RowStat>> = runs[1..]
+    let compared: Vec<(String, &crate::render::film::Film)> = runs[1..]
         .iter()
-        .map(|(_, r)| row_difference_stats(&r.image, base, camera, top, bottom))
+        .map(|(info, r)| (info.name.name().to_string(), &r.film))
         .collect();
-    if stats[0].is_empty() {
-        return Err(AppError::input(format!(
-            "no image row lies between {top} and {bottom} degrees; widen the band or the image"
-        )));
-    }
+    let inputs = Inputs {
+        camera: &runs[0].1.camera,
+        baseline: &runs[0].1.film,
+        scenarios: compared,
+        rows_deg: (top, bottom),
+        seed: job.scene.render.seed,
+    };
+    let estimator = Estimator::new(&inputs).map_err(|e| match e {
+        EstimateError::Mismatch => AppError::Run(e.into()),
+        _ => AppError::Input(e.into()),
+    })?;
+    let estimates = estimator.scenarios();
+    // Indices into `compared`: high_unmapped, low_mapped, low_unmapped, noise_floor.
+    let improvement = estimator.ratio(2, 1);
     let stats_csv = job.out.join("stats.csv");
-    write_stats_csv(&stats_csv, &stats)?;
+    write_stats_csv(&stats_csv, &estimates)?;
     let plot_error = |path: &Path| {
         let path = path.to_path_buf();
         move |message: String| {
@@ -256,7 +314,8 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
         }
     };
     let stats_png = job.out.join("stats.png");
-    plot::stats_plot(&stats_png, &stats, (top, bottom)).map_err(plot_error(&stats_png))?;
+    plot::stats_plot(&stats_png, &estimates.scenarios, (top, bottom))
+        .map_err(plot_error(&stats_png))?;
     let sheet_png = job.out.join("sheet.png");
     let labels: Vec<String> = runs[..4]
         .iter()
@@ -269,23 +328,40 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
             )
         })
         .collect();
-    let images: Vec<_> = runs[..4].iter().map(|(_, r)| &r.image).collect();
+    let images: Vec<_> = runs[..4].iter().map(|(_, r)| &r.film.image).collect();
     plot::contact_sheet(&sheet_png, &images, &labels, exposure).map_err(plot_error(&sheet_png))?;
 
-    let avg: Vec<(f64, f64)> = stats.iter().map(|s| band_average(s)).collect();
+    let e = &estimates.scenarios;
     let summary = CompareSummary {
-        std_high_unmapped: avg[0].1,
-        std_low_mapped: avg[1].1,
-        std_low_unmapped: avg[2].1,
-        std_noise_floor: avg[3].1,
-        mean_high_unmapped: avg[0].0,
-        mean_low_mapped: avg[1].0,
-        mean_low_unmapped: avg[2].0,
-        mean_noise_floor: avg[3].0,
-        improvement_ratio: avg[2].1 / avg[1].1,
-        rows: stats[0].len(),
+        std_high_unmapped: e[0].std,
+        std_low_mapped: e[1].std,
+        std_low_unmapped: e[2].std,
+        std_noise_floor: e[3].std,
+        mean_high_unmapped: e[0].mean.value,
+        mean_low_mapped: e[1].mean.value,
+        mean_low_unmapped: e[2].mean.value,
+        mean_noise_floor: e[3].mean.value,
+        improvement_ratio: improvement.plain,
+        std_high_unmapped_corrected: e[0].std_corrected.value,
+        std_low_mapped_corrected: e[1].std_corrected.value,
+        std_low_unmapped_corrected: e[2].std_corrected.value,
+        std_noise_floor_corrected: e[3].std_corrected.value,
+        improvement_ratio_corrected: improvement.corrected.value,
+        improvement_ratio_ci: improvement.corrected.ci,
+        improvement_significant: improvement.significant,
+        improvement_ratio_median_rows: improvement.median_rows,
+        improvement_ratio_without_glint: improvement.without_glint,
+        improvement_spp_to_resolve: improvement.spp_to_resolve,
+        improvement_ratio_trend: improvement.trend,
+        improvement_ratio_residual: improvement.residual,
+        noise_model_check: e[3].variance_over_noise,
+        rows: estimates.rows,
         rows_deg: (top, bottom),
+        spp: job.scene.render.spp,
+        wrong_side: job.scene.render.wrong_side,
         scenarios: runs.into_iter().map(|(info, _)| info).collect(),
+        estimates,
+        improvement,
         seconds_total: t_total.elapsed().as_secs_f64(),
         stats_csv,
         stats_png,
@@ -297,36 +373,84 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
 
 impl fmt::Display for CompareSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let ci = |i: &Interval| format!("{:.5} [{:.5}, {:.5}]", i.value, i.ci[0], i.ci[1]);
+        let num = |x: f64| {
+            if x.is_finite() {
+                format!("{x:.2}")
+            } else {
+                "n/a".into()
+            }
+        };
         writeln!(
             f,
-            "compare: {} rows from {} to {} degrees; band-averaged std of the luminance difference from the baseline:",
-            self.rows, self.rows_deg.0, self.rows_deg.1
+            "compare: {} rows from {} to {} degrees at {} spp; band-averaged std of the luminance difference from the baseline",
+            self.rows, self.rows_deg.0, self.rows_deg.1, self.spp
         )?;
         writeln!(
             f,
-            "  high tessellation, unmapped  {:.5}",
-            self.std_high_unmapped
+            "  (paper's statistic, noise included | noise-corrected with 95% interval | RMS noise)"
         )?;
+        for e in &self.estimates.scenarios {
+            writeln!(
+                f,
+                "  {:<14} {:>9.5} | {} | {:.5}{}",
+                e.name,
+                e.std,
+                ci(&e.std_corrected),
+                e.noise,
+                if e.significant {
+                    ""
+                } else {
+                    "  (not significantly different from the baseline)"
+                }
+            )?;
+        }
         writeln!(
             f,
-            "  low tessellation, mapped     {:.5}",
-            self.std_low_mapped
+            "  noise model check (noise floor, measured / predicted variance): {}",
+            ci(&self.noise_model_check)
         )?;
+        let r = &self.improvement;
         writeln!(
             f,
-            "  low tessellation, unmapped   {:.5}",
-            self.std_low_unmapped
+            "  improvement ratio (low unmapped / low mapped): paper's statistic {}; corrected {} [{}, {}]; median over rows {}; trend {}, residual {}",
+            num(r.plain),
+            num(r.corrected.value),
+            num(r.corrected.ci[0]),
+            num(r.corrected.ci[1]),
+            num(r.median_rows),
+            num(r.trend.value),
+            num(r.residual.value)
         )?;
-        writeln!(
-            f,
-            "  noise floor                  {:.5}",
-            self.std_noise_floor
-        )?;
-        writeln!(
-            f,
-            "  improvement ratio (low unmapped / low mapped): {:.2}",
-            self.improvement_ratio
-        )?;
+        if r.significant {
+            writeln!(f, "  normal mapping's effect is significant at 95%")?;
+        } else {
+            match r.spp_to_resolve {
+                Some(n) => writeln!(
+                    f,
+                    "  NOT significant at 95%: about {n} spp would resolve it if the ratio stays near {:.2}",
+                    r.corrected.value
+                )?,
+                None => writeln!(
+                    f,
+                    "  NOT significant at 95%, and more samples alone would not resolve it: {:.0}% of the interval's variance is spread over azimuth, not noise (render wider, or more cases)",
+                    100.0 * (1.0 - r.noise_share_of_variance)
+                )?,
+            }
+        }
+        for (e, glint) in self
+            .estimates
+            .scenarios
+            .iter()
+            .map(|e| (e, &e.glint_rows_deg))
+            .filter(|(_, g)| !g.is_empty())
+        {
+            writeln!(
+                f,
+                "  {}: glint rows at {:?} degrees (corrected band std without them {:.5})",
+                e.name, glint, e.std_corrected_without_glint
+            )?;
+        }
         for sc in &self.scenarios {
             writeln!(
                 f,

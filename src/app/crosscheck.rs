@@ -107,7 +107,7 @@ pub fn run(job: &CrosscheckJob) -> Result<CrosscheckReport, AppError> {
     for backend in [Backend::Embree, Backend::Rust] {
         let mut c = cfg.clone();
         c.render.backend = backend;
-        images.push(render_scene(&c, false)?.image);
+        images.push(render_scene(&c, false)?.film.image);
     }
     let d = ImageDifference::of(&images[0], &images[1]);
     Ok(CrosscheckReport {

@@ -1,13 +1,14 @@
 //! `vastocean render`: one scene end to end (ocean, tessellation, BVH, path tracing) into
-//! `PREFIX.exr` (linear RGB), `PREFIX.png` (tone-mapped preview) and `PREFIX.json` (the
-//! sidecar: every parameter, timings per phase, ray counts, guards).
+//! `PREFIX.exr` (linear RGB, plus `Y.variance`: the variance of each pixel's mean luminance),
+//! `PREFIX.png` (tone-mapped preview) and `PREFIX.json` (the sidecar: every parameter, timings
+//! per phase, ray counts, noise, guards).
 
 use std::fmt;
 use std::path::PathBuf;
 
 use super::{AppError, with_extension};
 use crate::config::SceneConfig;
-use crate::image_io::{auto_exposure, write_exr, write_json, write_png};
+use crate::image_io::{auto_exposure, write_exr_with, write_json, write_png};
 use crate::render::pipeline::{RenderReport, render_scene};
 
 /// A render job.
@@ -29,8 +30,9 @@ pub fn run(job: &RenderJob) -> Result<RenderReport, AppError> {
         with_extension(&job.out, ".png"),
         with_extension(&job.out, ".json"),
     );
-    write_exr(&exr, &r.image)?;
-    write_png(&png, &r.image, auto_exposure(&r.image))?;
+    let image = &r.film.image;
+    write_exr_with(&exr, image, &[("Y.variance", &r.film.var_y)])?;
+    write_png(&png, image, auto_exposure(image))?;
     r.report.exr = exr;
     r.report.png = png;
     r.report.json = json.clone();
@@ -64,6 +66,13 @@ impl fmt::Display for RenderReport {
             100.0 * self.normal_map_share,
             self.seconds_total
         )?;
+        if let (Some(n), Some(r)) = (self.noise_rms, self.noise_rms_relative) {
+            writeln!(
+                f,
+                "  noise: RMS standard error of pixel luminance {n:.3e} ({:.2}% of the mean)",
+                100.0 * r
+            )?;
+        }
         writeln!(
             f,
             "  NaN samples {}, wrong-side directions {}, truncated paths {}",

@@ -48,6 +48,10 @@ pub struct SceneFlags {
     /// The BVH: Debian's Embree or the pure-Rust one.
     #[arg(long, value_parser = choice::<vastocean::config::Backend>())]
     backend: Option<vastocean::config::Backend>,
+    /// What to do when a shading normal would send a ray to the wrong side of its triangle
+    /// (see the README's "How the error is measured").
+    #[arg(long, value_parser = choice::<vastocean::config::WrongSide>())]
+    wrong_side: Option<vastocean::config::WrongSide>,
 }
 
 impl SceneFlags {
@@ -69,6 +73,7 @@ impl SceneFlags {
         s.render.seed = self.seed.unwrap_or(s.render.seed);
         s.render.threads = self.threads.unwrap_or(s.render.threads);
         s.render.backend = self.backend.unwrap_or(s.render.backend);
+        s.render.wrong_side = self.wrong_side.unwrap_or(s.render.wrong_side);
         Ok(s)
     }
 }

@@ -21,7 +21,7 @@ use thiserror::Error;
 pub use camera::{CameraConfig, Projection};
 pub use lod::{LodChoice, LodConfig, Pattern, Reading};
 pub use ocean::OceanParams;
-pub use render::{Backend, NormalMode, RenderConfig, Water};
+pub use render::{Backend, NormalMode, RenderConfig, Water, WrongSide};
 pub use sky::{AnalyticSky, SkyConfig};
 
 #[derive(Debug, Error)]
@@ -315,6 +315,7 @@ mod tests {
         names_agree::<Reading>();
         names_agree::<NormalMode>();
         names_agree::<Backend>();
+        names_agree::<WrongSide>();
         names_agree::<ocean::SpectrumKind>();
         names_agree::<ocean::SpreadingKind>();
         names_agree::<ocean::Interp>();

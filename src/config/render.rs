@@ -16,6 +16,29 @@ pub enum NormalMode {
 
 super::choice!(NormalMode { Vertex => "vertex", Mapped => "mapped" });
 
+/// What the integrator does when the shading normal disagrees with the triangle it shades:
+/// when it faces away from the incoming ray, or would send the reflected or refracted ray to
+/// the wrong side of the triangle (DESIGN.md, Normal modes; measured in the README).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum WrongSide {
+    /// Shading normal facing away: use the geometric one; wrong-side direction: mirror it
+    /// across the triangle's plane, keeping its weight.
+    #[default]
+    Mirror,
+    /// Shading normal facing away: flip it to face the ray; wrong-side direction: mirror it.
+    Flip,
+    /// Bend the shading normal just enough that the reflection leaves above the triangle
+    /// (Cycles' ensure_valid_reflection, after Keller et al. 2017); a refraction still on the
+    /// wrong side is mirrored.
+    Bend,
+    /// End the branch that would leave on the wrong side, and the path at a shading normal
+    /// facing away (Mitsuba's strictNormals): no wrong-side light, at the cost of energy.
+    Terminate,
+}
+
+super::choice!(WrongSide { Mirror => "mirror", Flip => "flip", Bend => "bend", Terminate => "terminate" });
+
 /// Which BVH traces the scene: Embree when this build has it, else the Rust BVH.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -56,6 +79,8 @@ pub struct RenderConfig {
     /// Hits up to this depth branch into both reflection and refraction; deeper ones choose one.
     pub branch_depth: u32,
     pub backend: Backend,
+    /// What to do when the shading normal disagrees with the triangle it shades.
+    pub wrong_side: WrongSide,
 }
 
 impl Default for RenderConfig {
@@ -69,6 +94,7 @@ impl Default for RenderConfig {
             max_segments: 10,
             branch_depth: 3,
             backend: Backend::default(),
+            wrong_side: WrongSide::default(),
         }
     }
 }
@@ -90,12 +116,12 @@ pub struct Water {
 
 impl Default for Water {
     fn default() -> Self {
-        // Pure-water absorption at ~600/550/450 nm (Pope & Fry 1997); R_rs of clear open ocean
-        // in the red, green and blue (about 0.0003, 0.002, 0.008 1/sr; cf. Morel & Maritorena
-        // 2001).
+        // Pure-water absorption at 600 / 550 / 450 nm for R / G / B (Pope & Fry 1997: 0.2224,
+        // 0.0565, 0.00922 1/m); R_rs of clear open ocean in the red, green and blue (about
+        // 0.0003, 0.002, 0.008 1/sr; cf. Morel & Maritorena 2001).
         Water {
             ior: 1.333,
-            absorption: [0.25, 0.07, 0.02],
+            absorption: [0.2224, 0.0565, 0.00922],
             upwelling_rrs: [0.0003, 0.002, 0.008],
         }
     }

@@ -6,9 +6,10 @@
 //! The shading normal is the interpolated vertex normal (`vertex`, the paper's "without
 //! normal mapping") or, for `mapped` (paper section 4), the ocean normal of eq. 7 recomputed
 //! from the layers at the texture coordinate interpolated at the hit and tilted into the
-//! curved-earth frame there. A shading normal can disagree with the triangle it shades; when it
-//! would send the reflected or refracted ray to the wrong side of the geometric surface, the
-//! ray is mirrored back across the triangle's plane, and each case is counted.
+//! curved-earth frame there. A shading normal can disagree with the triangle it shades: face
+//! away from the incoming ray, or send the reflected or refracted ray to the wrong side of the
+//! geometric surface. [`WrongSide`] chooses what happens then (mirror the direction back, flip
+//! the normal, bend it as Cycles and Iray do, or end the branch), and each case is counted.
 //!
 //! Secondary rays leave the surface offset along the geometric normal by a bound on the hit
 //! point's floating-point error, rounded away from the surface (pbrt-v4, section 6.8.6;
@@ -19,7 +20,7 @@ use serde::Serialize;
 
 use super::water::{fresnel, reflect, refract};
 use crate::accel::{Accel, Hit, Ray};
-use crate::config::{NormalMode, SceneConfig, Water};
+use crate::config::{NormalMode, SceneConfig, Water, WrongSide};
 use crate::fp;
 use crate::mesh::Mesh;
 use crate::ocean::Sampler;
@@ -35,6 +36,7 @@ pub struct TraceSettings {
     /// Hits up to this depth branch into both reflection and refraction; deeper ones choose one.
     pub branch_depth: u32,
     pub water: Water,
+    pub wrong_side: WrongSide,
     /// Radiance a downward ray that never meets the surface again returns: the water's R_rs
     /// times the sky's irradiance (see [`Water::upwelling`]), resolved once per render.
     pub upwelling: [f32; 3],
@@ -55,6 +57,7 @@ impl TraceSettings {
             max_segments: scene.render.max_segments,
             branch_depth: scene.render.branch_depth,
             water: scene.water,
+            wrong_side: scene.render.wrong_side,
             upwelling: scene.water.upwelling(sky_irradiance).to_array(),
         }
     }
@@ -71,8 +74,12 @@ pub struct Counters {
     pub nan: u64,
     /// Reflected or refracted rays the shading normal sent to the wrong side of the triangle.
     pub wrong_side: u64,
-    /// Hits where the shading normal faced away from the incoming ray (geometric normal used).
+    /// Hits where the shading normal faced away from the incoming ray.
     pub backfacing_shading: u64,
+    /// Shading normals bent by the `bend` policy.
+    pub bent: u64,
+    /// Branches (or, at a normal facing away, whole hits) ended by the `terminate` policy.
+    pub terminated: u64,
     /// Paths cut at `max_segments` while still bouncing.
     pub truncated: u64,
     /// Rays in the water known not to meet the surface again, so not traced.
@@ -90,6 +97,8 @@ impl std::ops::AddAssign for Counters {
         self.nan += o.nan;
         self.wrong_side += o.wrong_side;
         self.backfacing_shading += o.backfacing_shading;
+        self.bent += o.bent;
+        self.terminated += o.terminated;
         self.truncated += o.truncated;
         self.skipped += o.skipped;
         self.normal_evals += o.normal_evals;
@@ -228,26 +237,59 @@ struct Scatter {
     from_below: bool,
     attenuation: Vec3,
     fresnel: f32,
-    reflected: Vec3,
-    /// `None` on total internal reflection.
-    refracted: Option<Vec3>,
+    /// `None`: the wrong-side policy ended this branch.
+    reflected: Option<Vec3>,
+    /// `None` on total internal reflection; `Some(None)` when the policy ended the branch.
+    refracted: Option<Option<Vec3>>,
 }
 
-/// Keeps a new direction `w` on its proper side of the triangle (normal `ng`, facing the
-/// incoming ray): mirrored back across the triangle's plane when the shading normal sent it to
-/// the wrong side (see the module doc), counted.
-fn keep_side(w: Vec3, ng: Vec3, want_same_side_as_ng: bool, c: &mut Counters) -> Vec3 {
+/// A new direction `w` on its proper side of the triangle (normal `ng`, facing the incoming
+/// ray), as the policy wants it: unchanged when it is on its side; otherwise mirrored back
+/// across the triangle's plane, keeping its weight, or (`Terminate`) no direction at all.
+/// Wrong-side directions are counted.
+fn keep_side(
+    w: Vec3,
+    ng: Vec3,
+    want_same_side_as_ng: bool,
+    policy: WrongSide,
+    c: &mut Counters,
+) -> Option<Vec3> {
     let s = w.dot(ng);
     if (s > 0.0) == want_same_side_as_ng {
-        return w;
+        return Some(w);
     }
     c.wrong_side += 1;
+    if policy == WrongSide::Terminate {
+        c.terminated += 1;
+        return None;
+    }
     let m = w - 2.0 * s * ng;
-    if m.dot(ng) == 0.0 {
+    Some(if m.dot(ng) == 0.0 {
         if want_same_side_as_ng { ng } else { -ng }
     } else {
         m
-    }
+    })
+}
+
+/// Cycles' `ensure_valid_reflection` (after Keller et al. 2017, "The Iray Light Transport
+/// Simulation and Rendering System"): the shading normal `n` bent, in the plane of `n` and the
+/// geometric normal `ng`, just enough that the mirror reflection of `i` (towards the viewer,
+/// on `ng`'s side) leaves at least as steeply as 90 % of the incoming ray's elevation (at most
+/// 0.01). Unchanged when the reflection is valid already.
+pub fn bend_normal(ng: Vec3, i: Vec3, n: Vec3) -> Vec3 {
+    let ni = n.dot(i);
+    let (r, threshold) = if ni > 0.0 {
+        let r = 2.0 * ni * n - i;
+        let threshold = (0.9 * ng.dot(i)).min(0.01);
+        if ng.dot(r) >= threshold {
+            return n;
+        }
+        (r, threshold)
+    } else {
+        (-i, 0.01)
+    };
+    let r = r + ng * (threshold - ng.dot(r));
+    (i * r.length() + r * i.length()).normalize_or(ng)
 }
 
 impl SceneRef<'_> {
@@ -344,14 +386,34 @@ impl SceneRef<'_> {
         if from_below {
             ns = -ns;
         }
+        let policy = settings.wrong_side;
+        let mut dead = false;
         if d.dot(ns) >= 0.0 {
             c.backfacing_shading += 1;
-            ns = ng;
+            match policy {
+                WrongSide::Mirror => ns = ng,
+                WrongSide::Flip => ns = -ns,
+                // Bent below, as every other normal is.
+                WrongSide::Bend => {}
+                WrongSide::Terminate => dead = true,
+            }
+        }
+        if policy == WrongSide::Bend {
+            let bent = bend_normal(ng, -d, ns);
+            c.bent += u64::from(bent != ns);
+            ns = bent;
         }
         let cos_i = -d.dot(ns);
         let fresnel = fresnel(cos_i, eta_i, eta_t);
-        let reflected = keep_side(reflect(d, ns), ng, true, c);
-        let refracted = refract(d, ns, eta_i / eta_t).map(|t| keep_side(t, ng, false, c));
+        let (reflected, refracted) = if dead {
+            c.terminated += 1;
+            (None, Some(None))
+        } else {
+            (
+                keep_side(reflect(d, ns), ng, true, policy, c),
+                refract(d, ns, eta_i / eta_t).map(|t| keep_side(t, ng, false, policy, c)),
+            )
+        };
         Scatter {
             sp,
             from_below,
@@ -377,19 +439,22 @@ impl SceneRef<'_> {
         let mut trace = |w: Vec3, in_water: bool, rng: &mut Rng| {
             self.radiance(&s.sp.spawn(w), in_water, segment + 1, settings, rng, c)
         };
+        let mut branch = |w: Option<Vec3>, in_water: bool, rng: &mut Rng| {
+            w.map_or(Vec3::ZERO, |w| trace(w, in_water, rng))
+        };
         let f = s.fresnel;
         match s.refracted {
-            None => trace(s.reflected, r_water, rng),
+            None => branch(s.reflected, r_water, rng),
             Some(t_dir) if segment < settings.branch_depth => {
-                let lr = trace(s.reflected, r_water, rng);
-                let lt = trace(t_dir, t_water, rng);
+                let lr = branch(s.reflected, r_water, rng);
+                let lt = branch(t_dir, t_water, rng);
                 f * lr + (1.0 - f) * lt
             }
             Some(t_dir) => {
                 if rng.f32() < f {
-                    trace(s.reflected, r_water, rng)
+                    branch(s.reflected, r_water, rng)
                 } else {
-                    trace(t_dir, t_water, rng)
+                    branch(t_dir, t_water, rng)
                 }
             }
         }
@@ -409,5 +474,25 @@ mod tests {
         assert_eq!(tilt_to_earth(0.0, 0.0, r, Vec3::Y), Vec3::Y);
         let n = tilt_to_earth(0.0, -3000.0, r, Vec3::Y);
         assert!(n.z < 0.0 && n.x.abs() < 1e-9);
+    }
+
+    #[test]
+    fn bending_lifts_the_reflection_just_above_the_surface() {
+        let ng = Vec3::Y;
+        // Grazing view (i towards the viewer) of a normal tilted away: the mirror reflection
+        // would go below the surface.
+        let i = Vec3::new(-0.99, 0.02, 0.0).normalize();
+        let n = Vec3::new(0.3, 0.95, 0.0).normalize();
+        assert!((2.0 * n.dot(i) * n - i).dot(ng) < 0.0);
+        let b = bend_normal(ng, i, n);
+        let r = 2.0 * b.dot(i) * b - i;
+        let threshold = (0.9 * ng.dot(i)).min(0.01);
+        assert!((r.dot(ng) - threshold).abs() < 1e-4, "{r}");
+        assert!((b.length() - 1.0).abs() < 1e-5);
+        // A normal whose reflection is valid is left alone.
+        assert_eq!(bend_normal(ng, Vec3::new(-0.6, 0.8, 0.0), n), n);
+        // A normal facing away from the viewer is turned towards it.
+        let away = bend_normal(ng, i, Vec3::new(0.999, 0.04, 0.0).normalize());
+        assert!(away.dot(i) > 0.0 && (2.0 * away.dot(i) * away - i).dot(ng) > 0.0);
     }
 }

@@ -10,6 +10,7 @@ use std::time::Instant;
 use serde::Serialize;
 use thiserror::Error;
 
+use super::film::Film;
 use super::integrator::max_descent_slope;
 use super::{Camera, Counters, SceneRef, TraceSettings, render_image};
 use crate::accel::bvh::Bvh;
@@ -17,7 +18,7 @@ use crate::accel::bvh::Bvh;
 use crate::accel::embree::{BuildOptions, Device, EmbreeError, Scene};
 use crate::accel::{Accel, tracing_pool};
 use crate::config::{Backend, ConfigError, SceneConfig};
-use crate::image_io::{ImageError, RgbImage};
+use crate::image_io::ImageError;
 use crate::lod::{EARTH_RADIUS_M, LodError, LodParams, LodStats, tessellate};
 use crate::ocean::{OceanError, Surface};
 use crate::sky::Sky;
@@ -77,6 +78,11 @@ pub struct RenderReport {
     pub seconds_total: f64,
     pub rays: u64,
     pub mrays_per_s: f64,
+    /// RMS over the image of the standard error of the pixel luminance (from each pixel's
+    /// sample variance); `None` with one sample per pixel.
+    pub noise_rms: Option<f64>,
+    /// `noise_rms` over the image's mean luminance.
+    pub noise_rms_relative: Option<f64>,
     pub nan_count: u64,
     /// Rays the backend refused for a NaN or infinite origin or direction (answered as misses).
     pub rejected_rays: u64,
@@ -98,7 +104,7 @@ pub struct RenderReport {
 
 /// The images and counts of a render, before anything is written.
 pub struct Rendered {
-    pub image: RgbImage,
+    pub film: Film,
     pub camera: Camera,
     pub report: RenderReport,
 }
@@ -209,7 +215,7 @@ impl Prepared {
             sky: &self.sky,
         };
         let t = Instant::now();
-        let (image, c) = self.pool.install(|| {
+        let (film, c) = self.pool.install(|| {
             render_image(
                 &scene_ref,
                 &camera,
@@ -255,6 +261,8 @@ impl Prepared {
                 + seconds_trace,
             rays: c.rays,
             mrays_per_s: c.rays as f64 / seconds_trace.max(1e-12) / 1e6,
+            noise_rms: film.noise_rms(),
+            noise_rms_relative: film.noise_rms().map(|n| n / mean_luminance(&film.image)),
             nan_count: c.nan,
             rejected_rays: self.accel.rejected_rays(),
             wrong_side_count: c.wrong_side,
@@ -271,11 +279,21 @@ impl Prepared {
             config: cfg.clone(),
         };
         Ok(Rendered {
-            image,
+            film,
             camera,
             report,
         })
     }
+}
+
+/// Mean relative luminance of an image (for relative noise figures; at least 1e-30).
+fn mean_luminance(img: &crate::image_io::RgbImage) -> f64 {
+    let sum: f64 = img
+        .pixels
+        .iter()
+        .map(|&p| crate::color::luminance(p) as f64)
+        .sum();
+    (sum / img.pixels.len().max(1) as f64).max(1e-30)
 }
 
 /// Renders a validated scene end to end; `progress` shows a bar on stderr. Output paths are
@@ -299,7 +317,8 @@ mod tests {
         assert_eq!(r.report.backend, "rust");
         assert!(r.report.triangles > 1000 && r.report.rays > 0 && r.report.nan_count == 0);
         assert!(
-            r.image
+            r.film
+                .image
                 .pixels
                 .iter()
                 .all(|p| p.iter().all(|c| c.is_finite() && *c >= 0.0))

@@ -1,8 +1,9 @@
 //! Sea water as a smooth dielectric interface over an absorbing body (paper section 5: "each
 //! intersection generated a Fresnel reflection and refraction"). Fresnel reflectance is the
 //! exact unpolarised one for a dielectric (Born & Wolf); absorption follows Beer-Lambert per RGB
-//! channel; light that travels down and never returns to the surface is replaced by a
-//! configurable upwelling radiance, so the sea has a body colour rather than black.
+//! channel; light that travels down and never returns to the surface is replaced by the
+//! upwelling radiance a remote-sensing reflectance R_rs gives ([`Water::upwelling`]), so the sea
+//! has a body colour rather than black.
 
 use glam::Vec3;
 
@@ -43,11 +44,16 @@ pub fn refract(d: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
 }
 
 impl Water {
-    /// Water-leaving radiance under a sky of downwelling irradiance `irradiance` (the air-side
-    /// value, so the n^2 radiance scaling at the interface is already in it; paths that cross
-    /// air -> water -> air are unaffected, their two scalings cancel).
+    /// The radiance a downward ray in the water returns when it never meets the surface again:
+    /// the upwelling radiance just below the surface, L_u, under a sky of downwelling
+    /// irradiance `irradiance`. It is set so that the water-leaving radiance seen straight down
+    /// is R_rs E_d: the path that carries L_u up through the surface weights it by the Fresnel
+    /// transmittance 1 - F, so L_u = R_rs E_d / (1 - F(0)), and other view angles get the
+    /// transmittance they should. (The n^2 radiance scaling cancels on paths that cross air ->
+    /// water -> air.)
     pub fn upwelling(&self, irradiance: Vec3) -> Vec3 {
-        Vec3::from(self.upwelling_rrs) * irradiance
+        let t0 = 1.0 - fresnel(1.0, 1.0, self.ior);
+        Vec3::from(self.upwelling_rrs) * irradiance / t0
     }
 
     /// Beer-Lambert transmittance over `distance` metres of water.
@@ -86,6 +92,25 @@ mod tests {
         // from below at 60 degrees: total internal reflection
         let up = Vec3::new(60f32.to_radians().sin(), 60f32.to_radians().cos(), 0.0);
         assert!(refract(up, -Vec3::Y, 1.333).is_none());
+    }
+
+    #[test]
+    fn water_leaving_radiance_at_nadir_is_rrs_times_irradiance() {
+        let w = Water::default();
+        let e = Vec3::new(2.0, 3.0, 5.0);
+        // Straight down, the upwelling radiance crosses the surface with weight 1 - F(0).
+        let leaving = w.upwelling(e) * (1.0 - fresnel(1.0, w.ior, 1.0));
+        let want = Vec3::from(w.upwelling_rrs) * e;
+        assert!((leaving - want).abs().max_element() < 1e-6 * want.max_element());
+    }
+
+    #[test]
+    fn default_absorption_is_pope_and_fry_at_600_550_450_nm() {
+        // Pope & Fry 1997, pure water: 0.2224 (600 nm), 0.0565 (550 nm), 0.00922 (450 nm) 1/m.
+        let a = Water::default().absorption;
+        for (got, want) in a.iter().zip([0.2224, 0.0565, 0.00922]) {
+            assert!((got / want - 1.0).abs() < 0.01, "{a:?}");
+        }
     }
 
     proptest::proptest! {

@@ -18,8 +18,58 @@ use crate::image_io::{ImageError, RgbImage, read_exr};
 
 /// Angular radius of the analytic sky's sun, radians (0.53 degree diameter).
 pub const SUN_RADIUS_RAD: f32 = 0.004_625;
+/// The analytic sun's colour, scaled by its radiance.
+const SUN_COLOUR: Vec3 = Vec3::new(1.0, 0.93, 0.82);
 
 impl AnalyticSky {
+    /// Downwelling irradiance on a horizontal surface (see [`Sky::irradiance`]).
+    pub fn irradiance(&self) -> Vec3 {
+        let AnalyticSky::Clear {
+            sun_elevation_deg,
+            sun_azimuth_deg,
+            sun_radiance,
+            sky_scale,
+        } = *self
+        else {
+            return map_irradiance(&rasterize(self, 1024));
+        };
+        let without_sun = AnalyticSky::Clear {
+            sun_elevation_deg,
+            sun_azimuth_deg,
+            sun_radiance: 0.0,
+            sky_scale,
+        };
+        // The disc: sin(elevation) over a 64 x 64 grid across it, points below the horizon
+        // left out.
+        let (el, az) = (sun_elevation_deg.to_radians(), sun_azimuth_deg.to_radians());
+        let sun = equirect::direction(el, az);
+        let (u, v) = (
+            Vec3::new(-az.sin(), 0.0, az.cos()),
+            equirect::direction(el + std::f32::consts::FRAC_PI_2, az),
+        );
+        const K: usize = 64;
+        let mut cos_sum = 0.0f64;
+        let mut inside = 0usize;
+        for i in 0..K {
+            for j in 0..K {
+                let (a, b) = (
+                    (2.0 * (i as f32 + 0.5) / K as f32 - 1.0),
+                    (2.0 * (j as f32 + 0.5) / K as f32 - 1.0),
+                );
+                if a * a + b * b > 1.0 {
+                    continue;
+                }
+                inside += 1;
+                let d = (sun + SUN_RADIUS_RAD * (a * u + b * v)).normalize();
+                cos_sum += d.y.max(0.0) as f64;
+            }
+        }
+        let solid_angle = std::f64::consts::TAU * (1.0 - (SUN_RADIUS_RAD as f64).cos());
+        let disc = (solid_angle * cos_sum / inside.max(1) as f64) as f32;
+        map_irradiance(&rasterize(&without_sun, 1024))
+            + Vec3::splat(sun_radiance) * SUN_COLOUR * disc
+    }
+
     /// Radiance arriving from direction `d`.
     pub fn radiance(&self, d: Vec3) -> Vec3 {
         match *self {
@@ -39,7 +89,7 @@ impl AnalyticSky {
                 let cos_g = d.dot(sun).clamp(-1.0, 1.0);
                 let gamma = cos_g.acos();
                 if gamma < SUN_RADIUS_RAD {
-                    return Vec3::splat(sun_radiance) * Vec3::new(1.0, 0.93, 0.82);
+                    return Vec3::splat(sun_radiance) * SUN_COLOUR;
                 }
                 let up = d.y.max(0.0);
                 let zenith = Vec3::new(0.25, 0.45, 0.95);
@@ -111,17 +161,14 @@ impl Sky {
 
     /// Downwelling irradiance on a horizontal surface: the radiance of the upper hemisphere
     /// weighted by the cosine to the zenith, per channel (the dome's parallax is ignored). Exact
-    /// for a map (summed over its texels); an analytic sky is first sampled on a 1024 x 512 map.
+    /// for a map (summed over its texels). An analytic sky's smooth part is sampled on a
+    /// 1024 x 512 map; its sun disc, 1.5 texels across there, is integrated on its own.
     pub fn irradiance(&self) -> Vec3 {
-        let raster;
-        let img = match &self.source {
-            SkySource::Map(m) => m,
-            SkySource::Analytic(a) => {
-                raster = rasterize(a, 1024);
-                &raster
+        self.scale
+            * match &self.source {
+                SkySource::Map(m) => map_irradiance(m),
+                SkySource::Analytic(a) => a.irradiance(),
             }
-        };
-        self.scale * map_irradiance(img)
     }
 
     /// Direction from the camera to where the ray meets the dome: a sphere about the earth's
@@ -301,6 +348,30 @@ mod tests {
             *p = [1.0; 3];
         }
         assert_eq!(map_irradiance(&img), Vec3::ZERO);
+    }
+
+    #[test]
+    fn the_sun_disc_adds_its_exact_irradiance() {
+        let sun = |el: f32| AnalyticSky::Clear {
+            sun_elevation_deg: el,
+            sun_azimuth_deg: 70.0,
+            sun_radiance: 1000.0,
+            sky_scale: 0.0,
+        };
+        // (1 - cos R) cancels badly in f32.
+        let omega = (std::f64::consts::TAU * (1.0 - (SUN_RADIUS_RAD as f64).cos())) as f32;
+        // Well up: L x solid angle x sin(elevation) (exact to second order in the radius).
+        let e = sun(30.0).irradiance();
+        let want = 1000.0 * SUN_COLOUR * omega * 0.5;
+        assert!(
+            ((e - want) / want).abs().max_element() < 1e-3,
+            "{e} vs {want}"
+        );
+        // A sun 0.1 degrees up, its disc 0.265 degrees in radius: part of it is below the
+        // horizon and adds nothing.
+        let low = sun(0.1).irradiance().x;
+        let full = 1000.0 * omega * 0.1f32.to_radians().sin();
+        assert!(low > 0.0 && low < 1.5 * full, "{low} vs {full}");
     }
 
     #[test]
