@@ -34,6 +34,8 @@ fn render_job_writes_exr_png_and_sidecar() {
         "nan_count",
         "wrong_side_count",
         "rejected_rays",
+        "noise_rms",
+        "noise_rms_relative",
         "exr",
         "png",
     ] {
@@ -44,6 +46,16 @@ fn render_job_writes_exr_png_and_sidecar() {
     let img = vastocean::image_io::read_exr(&dir.join("scene.exr")).unwrap();
     assert_eq!((img.width, img.height), (96, 48));
     assert!(dir.join("scene.png").metadata().unwrap().len() > 100);
+    // The per-pixel variance travels in the EXR, and the sidecar's noise is its RMS.
+    let var = vastocean::image_io::read_exr_channel(&dir.join("scene.exr"), "Y.variance").unwrap();
+    assert_eq!(var.len(), 96 * 48);
+    assert!(var.iter().all(|v| v.is_finite() && *v >= 0.0));
+    let rms = (var.iter().map(|&v| v as f64).sum::<f64>() / var.len() as f64).sqrt();
+    let noise = sidecar["noise_rms"].as_f64().unwrap();
+    assert!(
+        noise > 0.0 && (rms / noise - 1.0).abs() < 1e-5,
+        "{rms} vs {noise}"
+    );
     let _ = std::fs::remove_dir_all(dir);
 }
 

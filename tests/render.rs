@@ -124,7 +124,8 @@ fn white_furnace_every_pixel_equals_the_sky() {
                 upwelling,
                 ..TraceSettings::default()
             };
-            let (film, c) = render_image(&scene, &equirect(64, None), 2.0, 4, 1, &settings, false);
+            let (film, c) =
+                render_image(&scene, &equirect(64, None), 2.0, 4, 1, &settings, 0, false);
             let img = film.image;
             assert!(c.hits > 1000, "the sea must be hit: {c:?}");
             let worst = img
@@ -164,7 +165,7 @@ fn flat_sea_matches_the_fresnel_weighted_mirror_lookup() {
             ..TraceSettings::default()
         };
         let cam = equirect(128, Some((-2.0, -60.0)));
-        let img = render_image(&scene, &cam, 2.0, 64, 3, &settings, false)
+        let img = render_image(&scene, &cam, 2.0, 256, 3, &settings, 0, false)
             .0
             .image;
         let sky_at = |d: Vec3| Vec3::from(horizon).lerp(Vec3::from(zenith), d.y.clamp(0.0, 1.0));
@@ -280,6 +281,7 @@ fn vertex_and_mapped_differ_on_a_coarse_mesh_and_agree_on_a_fine_one() {
                     normals,
                     ..TraceSettings::default()
                 },
+                0,
                 false,
             )
             .0
@@ -317,6 +319,7 @@ fn render_is_bit_identical_for_one_and_two_threads() {
                     3,
                     11,
                     &TraceSettings::default(),
+                    8,
                     false,
                 )
             })
@@ -326,7 +329,12 @@ fn render_is_bit_identical_for_one_and_two_threads() {
         assert_eq!(ca.rays, cb.rays);
         // Every output of the film, not only the image, is thread-count free.
         assert_eq!(a.var_y, b.var_y);
-        assert_eq!(a.halves, b.halves);
+        assert_eq!(a.batches, b.batches);
+        // Three samples, so three batches of one sample each.
+        assert_eq!(
+            a.batches.as_ref().map(|b| b.spp.clone()),
+            Some(vec![1, 1, 1])
+        );
         let (a, b) = (a.image, b.image);
         assert!(
             a.pixels
@@ -363,6 +371,7 @@ fn skipping_rays_that_cannot_return_changes_no_pixel() {
             4,
             2,
             &TraceSettings::default(),
+            0,
             false,
         )
     };
@@ -437,6 +446,7 @@ fn grazing_rays_at_the_horizon_give_no_nan() {
         2,
         5,
         &TraceSettings::default(),
+        0,
         false,
     );
     let img = img.image;

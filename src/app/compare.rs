@@ -17,6 +17,7 @@ use crate::analysis::error::{
 use crate::analysis::plot;
 use crate::config::{LodConfig, NormalMode, Projection, SceneConfig};
 use crate::image_io::{auto_exposure, write_atomically, write_exr_with, write_json, write_png};
+use crate::render::film::MAX_BATCHES;
 use crate::render::pipeline::{Rendered, prepare};
 
 /// What to compare: one scene (ocean, sky, camera, samples) and the two tessellations.
@@ -100,6 +101,8 @@ pub struct ScenarioInfo {
     pub seconds_render: f64,
     pub wrong_side_count: u64,
     pub nan_count: u64,
+    /// Every counter of the render (hits, normals facing away, bent, ended branches, ...).
+    pub counters: crate::render::Counters,
     pub exr: PathBuf,
     pub png: PathBuf,
 }
@@ -131,7 +134,7 @@ pub struct CompareSummary {
     /// The interval excludes 1.
     pub improvement_significant: bool,
     pub improvement_ratio_median_rows: f64,
-    pub improvement_ratio_without_glint: f64,
+    pub improvement_ratio_without_glint: Interval,
     /// When not significant: the spp that would resolve it, if more samples can.
     pub improvement_spp_to_resolve: Option<u64>,
     /// Of the trend and of the residual detail.
@@ -152,6 +155,10 @@ pub struct CompareSummary {
     pub stats_png: PathBuf,
     pub sheet_png: PathBuf,
 }
+
+/// The noise floor's measured over predicted variance beyond which (interval and all) the noise
+/// estimate is reported as unreliable.
+pub const NOISE_CHECK_RANGE: (f64, f64) = (0.8, 1.25);
 
 /// The scene as one tessellation renders it.
 fn with_lod(scene: &SceneConfig, lod: &LodConfig) -> SceneConfig {
@@ -208,7 +215,7 @@ fn render_scenarios(job: &CompareJob) -> Result<Vec<(ScenarioInfo, Rendered)>, A
             let mut c = cfg.clone();
             c.render.normals = sc.normals();
             c.render.seed = cfg.render.seed.wrapping_add(sc.seed_offset());
-            let r = prepared.render(&c, job.progress)?;
+            let r = prepared.render_batches(&c, MAX_BATCHES, job.progress)?;
             let rep = &r.report;
             let info = ScenarioInfo {
                 name: sc,
@@ -221,6 +228,7 @@ fn render_scenarios(job: &CompareJob) -> Result<Vec<(ScenarioInfo, Rendered)>, A
                 seconds_render: rep.seconds_trace,
                 wrong_side_count: rep.wrong_side_count,
                 nan_count: rep.nan_count,
+                counters: rep.counters,
                 exr: job.out.join(format!("{}.exr", sc.name())),
                 png: job.out.join(format!("{}.png", sc.name())),
             };
@@ -438,17 +446,29 @@ impl fmt::Display for CompareSummary {
                 )?,
             }
         }
-        for (e, glint) in self
-            .estimates
-            .scenarios
-            .iter()
-            .map(|e| (e, &e.glint_rows_deg))
-            .filter(|(_, g)| !g.is_empty())
-        {
+        let glint = &self.estimates.scenarios[0].glint_rows_deg;
+        if !glint.is_empty() {
+            let w = &r.without_glint;
             writeln!(
                 f,
-                "  {}: glint rows at {:?} degrees (corrected band std without them {:.5})",
-                e.name, glint, e.std_corrected_without_glint
+                "  {} of {} rows cross the sun's glint ({:.2} to {:.2} degrees); without them the corrected ratio is {} [{}, {}]",
+                glint.len(),
+                self.rows,
+                glint.first().copied().unwrap_or(0.0),
+                glint.last().copied().unwrap_or(0.0),
+                num(w.value),
+                num(w.ci[0]),
+                num(w.ci[1])
+            )?;
+        }
+        let check = &self.noise_model_check;
+        if check.ci[1] < NOISE_CHECK_RANGE.0 || check.ci[0] > NOISE_CHECK_RANGE.1 {
+            writeln!(
+                f,
+                "  warning: the noise floor's measured / predicted variance is {} [{}, {}], well away from 1: the noise estimate is unreliable here (heavy-tailed samples, usually a bright sun's glint); trust the summary without glint rows, clip the sun or render more samples",
+                num(check.value),
+                num(check.ci[0]),
+                num(check.ci[1])
             )?;
         }
         for sc in &self.scenarios {

@@ -204,6 +204,17 @@ impl Prepared {
     /// ocean, LOD and sky sections of `cfg` are those `prepare` used; only `camera` (besides its
     /// position and height) and `render` may differ.
     pub fn render(&self, cfg: &SceneConfig, progress: bool) -> Result<Rendered, RenderError> {
+        self.render_batches(cfg, 0, progress)
+    }
+
+    /// As [`Prepared::render`], keeping `batches` batch means per pixel (see
+    /// [`super::film`]), which the error estimator needs.
+    pub fn render_batches(
+        &self,
+        cfg: &SceneConfig,
+        batches: usize,
+        progress: bool,
+    ) -> Result<Rendered, RenderError> {
         cfg.validate()?;
         let camera = Camera::new(cfg.camera.projection, cfg.camera.width, cfg.camera.aspect);
         let sampler = self.ocean.sampler(self.camera_position_m);
@@ -223,6 +234,7 @@ impl Prepared {
                 cfg.render.spp,
                 cfg.render.seed,
                 &TraceSettings::new(cfg, self.sky_irradiance),
+                batches,
                 progress,
             )
         });
