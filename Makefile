@@ -8,7 +8,7 @@ DEB_PKGS   := libembree-dev libclang-dev pkg-config gcc fonts-dejavu-core
 SUDO       := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 OUT        ?= out
 
-.PHONY: setup build run test test-full bench lint embree4-check clean
+.PHONY: setup build run test test-full bench bench-report lint embree4-check clean
 
 # Installs only the packages that are missing; apt-get update runs only when something is.
 setup:
@@ -42,6 +42,13 @@ test-full: test
 
 bench: setup
 	$(CARGO) bench
+
+# The two reports the README quotes, regenerated in full into benches/results/ (bvh: about 10
+# minutes on 2 cores; accuracy: see its summary.json for its own time). Nothing else may run
+# meanwhile: they time things.
+bench-report: build
+	./target/release/vastocean bench bvh --out benches/results/bvh
+	./target/release/vastocean bench accuracy --out benches/results/accuracy
 
 lint: setup
 	$(CARGO) fmt --check

@@ -130,6 +130,27 @@ impl Mesh {
     pub fn positions(&self) -> &[[f32; 3]] {
         &self.positions
     }
+
+    /// Replaces the vertex positions in place (same count, same topology; the allocation and
+    /// its padding stay, so a BVH sharing the buffer can be refitted). Checked first: on a
+    /// wrong count or a non-finite position nothing changes.
+    pub fn set_positions(&mut self, new: &[[f32; 3]]) -> Result<(), MeshError> {
+        if new.len() != self.positions.len() {
+            return Err(MeshError::LengthMismatch {
+                positions: self.positions.len(),
+                what: "new positions",
+                len: new.len(),
+            });
+        }
+        if let Some(index) = new.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+            return Err(MeshError::NonFinite {
+                index,
+                value: new[index],
+            });
+        }
+        self.positions.0.copy_from_slice(new);
+        Ok(())
+    }
     pub fn normals(&self) -> &[[f32; 3]] {
         &self.normals
     }

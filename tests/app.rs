@@ -154,3 +154,100 @@ fn tiny_compare_runs_end_to_end_and_writes_every_file() {
     );
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn bench_accuracy_writes_its_files_and_a_configuration_matches_itself() {
+    use app::bench::accuracy::{AccuracyJob, Tessellation};
+    use vastocean::config::LodChoice;
+    let dir = tmp("bench-accuracy");
+    let mut scene = AccuracyJob::default_scene();
+    scene.render.threads = 2;
+    let job = AccuracyJob {
+        scene,
+        width: 64,
+        tessellations: vec![Tessellation::preset(LodChoice::PaperLow)],
+        spp: vec![8],
+        reference: Tessellation::preset(LodChoice::PaperLow),
+        reference_spp: 32,
+        out: dir.clone(),
+        progress: false,
+    };
+    let r = app::bench::accuracy::run(&job).unwrap();
+    assert_eq!(r.points.len(), 2, "mapped and vertex");
+    // The mapped point is the reference's configuration with fewer samples of the same seed:
+    // its error is zero within noise.
+    let same = &r.points[0];
+    assert!(same.error_ci[0] <= 1e-12, "{same:?}");
+    for f in ["frontier.csv", "frontier.png", "summary.json"] {
+        assert!(dir.join(f).metadata().unwrap().len() > 50, "{f}");
+    }
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    for key in ["points", "reference", "csv", "png", "front"] {
+        assert!(v.get(key).is_some(), "{key}");
+    }
+    for key in [
+        "lod",
+        "normals",
+        "spp",
+        "triangles",
+        "seconds_total",
+        "error",
+        "error_ci",
+        "pareto",
+    ] {
+        assert!(v["points"][0].get(key).is_some(), "point lacks {key}");
+    }
+    assert!(
+        v["points"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|p| p["pareto"] == true)
+    );
+    // A bad spp is bad input, and nothing is written.
+    let bad = AccuracyJob {
+        spp: vec![12],
+        out: tmp("bench-accuracy-bad"),
+        ..job
+    };
+    let e = app::bench::accuracy::run(&bad).unwrap_err();
+    assert_eq!(e.exit_code(), 2, "{e}");
+    assert!(!tmp("bench-accuracy-bad").exists());
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[cfg(feature = "embree")]
+#[test]
+fn bench_bvh_writes_a_row_per_backend_quality_and_size() {
+    let dir = tmp("bench-bvh");
+    let job = app::bench::bvh::BvhBenchJob {
+        sizes: vec![1e3, 4e3],
+        ..app::bench::bvh::BvhBenchJob::quick(dir.clone(), 2)
+    };
+    let r = app::bench::bvh::run(&job).unwrap();
+    // Embree low, medium, high, refit and the Rust BVH, at each size.
+    assert_eq!(r.rows.len(), 10);
+    assert!(
+        r.rows
+            .iter()
+            .all(|row| row.bytes > 0 && row.seconds > 0.0 && row.triangles > 500)
+    );
+    assert!(r.rows.iter().all(|row| row.camera_mrays_per_s > 0.0));
+    let csv = std::fs::read_to_string(dir.join("bvh.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 11);
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    for key in [
+        "backend",
+        "quality",
+        "triangles",
+        "seconds",
+        "tris_per_s",
+        "bytes",
+    ] {
+        assert!(v["rows"][0].get(key).is_some(), "row lacks {key}");
+    }
+    assert!(dir.join("bvh.png").metadata().unwrap().len() > 1000);
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -4,7 +4,7 @@
 use std::sync::Arc;
 
 use rayon::prelude::*;
-use vastocean::accel::embree::{BuildOptions, Device, Quality, Scene};
+use vastocean::accel::embree::{BuildOptions, Device, EmbreeError, Quality, Scene};
 use vastocean::accel::{Accel, Hit, Ray, brute::BruteForce};
 use vastocean::mesh::Mesh;
 
@@ -262,4 +262,30 @@ fn degenerate_triangles_and_rays_on_the_surface_do_not_produce_nan() {
             );
         }
     }
+}
+
+#[test]
+fn a_refit_scene_follows_its_moved_vertices() {
+    let mesh = Mesh::grid(20, 20, 1.0);
+    let up: Vec<[f32; 3]> = mesh.positions().iter().map(|p| [p[0], 1.0, p[2]]).collect();
+    let options = BuildOptions {
+        quality: Quality::Refit,
+        ..BuildOptions::default()
+    };
+    let shared = Arc::new(mesh.clone());
+    let mut scene = Scene::new(&device(), shared.clone(), options).unwrap();
+    // While something else holds the mesh its vertices cannot move.
+    assert!(matches!(scene.refit(&up), Err(EmbreeError::Shared)));
+    drop(shared);
+    let ray = Ray::new([5.5, 5.0, 7.25], [0.0, -1.0, 0.0]);
+    assert_eq!(scene.intersect(&ray).map(|h| h.t), Some(5.0));
+    scene.refit(&up).unwrap();
+    assert_eq!(scene.intersect(&ray).map(|h| h.t), Some(4.0));
+    assert_eq!(scene.mesh().positions()[7], up[7]);
+    // Invalid positions change nothing.
+    let mut bad = up.clone();
+    bad[3][1] = f32::NAN;
+    assert!(scene.refit(&bad).is_err());
+    assert_eq!(scene.intersect(&ray).map(|h| h.t), Some(4.0));
+    assert!(scene.bytes() > 0, "the memory monitor saw the build");
 }

@@ -7,6 +7,7 @@
  */
 #include "embree_shim.h"
 
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -37,7 +38,23 @@ typedef struct vo_error_sink {
 typedef struct vo_device_box {
   RTCDevice device;
   vo_error_sink sink;
+  /* Bytes Embree holds for this device now, and the most it has held (memory monitor). */
+  _Atomic long long bytes;
+  _Atomic long long peak;
 } vo_device_box;
+
+/* Embree's memory monitor: called from any thread for each allocation (bytes > 0) and release
+ * (bytes < 0), once, before or after it happens. Nothing is ever cancelled here, so every call
+ * counts. */
+static bool vo_on_memory(void *user, ssize_t bytes, bool post) {
+  vo_device_box *box = (vo_device_box *)user;
+  (void)post;
+  long long now = atomic_fetch_add(&box->bytes, (long long)bytes) + (long long)bytes;
+  long long peak = atomic_load(&box->peak);
+  while (now > peak && !atomic_compare_exchange_weak(&box->peak, &peak, now)) {
+  }
+  return true;
+}
 
 static void vo_on_error(void *user, enum RTCError code, const char *message) {
   vo_error_sink *sink = (vo_error_sink *)user;
@@ -62,7 +79,16 @@ void *vo_device_new(const char *config, vo_error_fn on_error, void *user) {
     return NULL;
   }
   rtcSetDeviceErrorFunction(box->device, vo_on_error, &box->sink);
+  atomic_init(&box->bytes, 0);
+  atomic_init(&box->peak, 0);
+  rtcSetDeviceMemoryMonitorFunction(box->device, vo_on_memory, box);
   return box;
+}
+
+void vo_device_memory(void *device, long long *bytes, long long *peak) {
+  vo_device_box *box = (vo_device_box *)device;
+  *bytes = atomic_load(&box->bytes);
+  *peak = atomic_load(&box->peak);
 }
 
 void vo_device_release(void *device) {
@@ -132,11 +158,14 @@ static enum RTCBuildQuality vo_rtc_quality(vo_quality q) {
 void *vo_scene_new(void *device, vo_quality quality, uint32_t flags) {
   RTCScene scene = rtcNewScene(vo_raw(device));
   if (!scene) return NULL;
-  /* A scene's build quality has no REFIT level; refit applies to geometries only. */
-  rtcSetSceneBuildQuality(scene, quality == VO_QUALITY_REFIT ? RTC_BUILD_QUALITY_MEDIUM : vo_rtc_quality(quality));
+  /* A scene's build quality has no REFIT level; refit applies to geometries only, and Embree
+   * honours a geometry's quality only in the two-level structure it builds for a scene of LOW
+   * quality (rtcSetGeometryBuildQuality(3)). */
+  rtcSetSceneBuildQuality(scene, quality == VO_QUALITY_REFIT ? RTC_BUILD_QUALITY_LOW : vo_rtc_quality(quality));
   int f = RTC_SCENE_FLAG_NONE;
   if (flags & VO_SCENE_COMPACT) f |= RTC_SCENE_FLAG_COMPACT;
   if (flags & VO_SCENE_ROBUST) f |= RTC_SCENE_FLAG_ROBUST;
+  if (quality == VO_QUALITY_REFIT) f |= RTC_SCENE_FLAG_DYNAMIC;
   rtcSetSceneFlags(scene, (enum RTCSceneFlags)f);
   return scene;
 }
@@ -169,6 +198,12 @@ void *vo_scene_attach_triangles(void *device, void *scene, vo_quality quality, c
 }
 
 void vo_scene_commit(void *scene) { rtcCommitScene((RTCScene)scene); }
+
+void vo_scene_refit(void *scene, void *geometry) {
+  rtcUpdateGeometryBuffer((RTCGeometry)geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+  rtcCommitGeometry((RTCGeometry)geometry);
+  rtcCommitScene((RTCScene)scene);
+}
 
 void vo_scene_bounds(void *scene, float lower[3], float upper[3]) {
   struct RTCBounds b;

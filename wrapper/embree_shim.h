@@ -75,6 +75,10 @@ vo_version vo_device_version(void *device);
  * into buf (NUL-terminated, truncated to len). Returns the number of bytes written. */
 size_t vo_describe(const char *config, char *buf, size_t len);
 
+/* Bytes Embree holds for this device now, and the most it has held since it was created
+ * (from its memory monitor callback). */
+void vo_device_memory(void *device, long long *bytes, long long *peak);
+
 /* Sets flush-to-zero and denormals-are-zero in this thread's MXCSR, as Embree asks of every
  * thread that traces (denormal arithmetic is many times slower in its kernels). */
 void vo_flush_denormals(void);
@@ -91,6 +95,10 @@ void *vo_scene_attach_triangles(void *device, void *scene, vo_quality quality, c
                                 size_t vertex_count, const uint32_t *indices, size_t triangle_count,
                                 const float *uvs, uint32_t *geom_id);
 void vo_scene_commit(void *scene);
+/* After the caller changed the vertex buffer in place: tells Embree, commits the geometry and
+ * the scene. With the geometry attached at VO_QUALITY_REFIT, Embree refits the BVH's bounds
+ * instead of rebuilding it. */
+void vo_scene_refit(void *scene, void *geometry);
 void vo_scene_bounds(void *scene, float lower[3], float upper[3]);
 
 /* Queries; the scene must be committed. Safe to call from many threads at once. */

@@ -129,6 +129,10 @@ impl Accel for BruteForce {
     fn name(&self) -> &'static str {
         "brute"
     }
+
+    fn bytes(&self) -> u64 {
+        std::mem::size_of_val(self.tris.as_slice()) as u64
+    }
 }
 
 #[cfg(test)]

@@ -51,6 +51,10 @@ pub enum EmbreeError {
     Unpadded,
     #[error("the mesh has {0} triangles; Embree's index buffer holds at most 2^32-1")]
     TooLarge(usize),
+    #[error("the scene's mesh is shared, so its vertices cannot move")]
+    Shared,
+    #[error("the moved mesh is invalid: {0}")]
+    Mesh(String),
 }
 
 fn error_name(code: i32) -> &'static str {
@@ -65,8 +69,9 @@ fn error_name(code: i32) -> &'static str {
     }
 }
 
-/// BVH build quality (Embree's RTCBuildQuality). `Refit` applies to the geometry; the scene
-/// itself is then built at medium quality.
+/// BVH build quality (Embree's RTCBuildQuality). `Refit` applies to the geometry: the scene is
+/// then built at low quality, as the two-level structure in which Embree honours a geometry's
+/// own quality, and [`Scene::refit`] refits the geometry's BVH instead of rebuilding it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum Quality {
@@ -179,6 +184,15 @@ impl Device {
         self.threads
     }
 
+    /// Bytes Embree holds for this device now, and the most it has held since it was created
+    /// (its memory monitor; builds on other threads included).
+    pub fn memory(&self) -> (u64, u64) {
+        let (mut now, mut peak) = (0i64, 0i64);
+        // SAFETY: raw is a live device; the out-parameters are valid.
+        unsafe { ffi::vo_device_memory(self.raw.as_ptr(), &mut now, &mut peak) };
+        (now.max(0) as u64, peak.max(0) as u64)
+    }
+
     /// The Embree version of the loaded library, e.g. "3.13.5".
     pub fn version(&self) -> String {
         // SAFETY: raw is a live device.
@@ -247,6 +261,9 @@ pub struct Scene {
     device: Arc<Device>,
     /// Rays with a NaN or infinite origin or direction, answered as misses without Embree.
     rejected: AtomicU64,
+    /// What the device's memory monitor saw the build allocate (the BVH and Embree's own
+    /// per-geometry data; the shared mesh buffers are not copied).
+    bytes: u64,
 }
 
 // SAFETY: a committed scene is only read (rtcIntersect*, rtcOccluded*, rtcInterpolate), which
@@ -324,10 +341,12 @@ impl Scene {
                 message: "no geometry returned".into(),
             })
         })?;
+        let before = device.memory().0;
         let start = Instant::now();
         // SAFETY: scene is live and complete.
         unsafe { ffi::vo_scene_commit(scene.as_ptr()) };
         let build_seconds = start.elapsed().as_secs_f64();
+        let bytes = device.memory().0.saturating_sub(before);
         device.check("rtcCommitScene").map_err(release)?;
         Ok(Scene {
             raw: scene,
@@ -337,6 +356,7 @@ impl Scene {
             options,
             device: device.clone(),
             rejected: AtomicU64::new(0),
+            bytes,
         })
     }
 
@@ -352,6 +372,28 @@ impl Scene {
 
     pub fn options(&self) -> BuildOptions {
         self.options
+    }
+
+    /// Moves the mesh's vertices to `positions` in place (the topology stays) and updates the
+    /// BVH: a refit of its bounds when the scene was built with [`Quality::Refit`], a rebuild
+    /// otherwise. Returns the seconds Embree took. Fails without touching anything when
+    /// something else still holds the scene's mesh or the positions are invalid.
+    pub fn refit(&mut self, positions: &[[f32; 3]]) -> Result<f64, EmbreeError> {
+        let mesh = Arc::get_mut(&mut self.mesh).ok_or(EmbreeError::Shared)?;
+        mesh.set_positions(positions)
+            .map_err(|e| EmbreeError::Mesh(e.to_string()))?;
+        let _building = self
+            .device
+            .building
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        let start = Instant::now();
+        // SAFETY: the scene and geometry are live; the vertex buffer is the one attached (the
+        // Vec was changed in place, never reallocated) and nothing traces while `&mut self`.
+        unsafe { ffi::vo_scene_refit(self.raw.as_ptr(), self.geometry.as_ptr()) };
+        let seconds = start.elapsed().as_secs_f64();
+        self.device.check("rtcCommitScene (refit)")?;
+        Ok(seconds)
     }
 
     /// Axis-aligned bounds of the scene as Embree sees it: (lower, upper).
@@ -472,6 +514,10 @@ impl Accel for Scene {
 
     fn rejected_rays(&self) -> u64 {
         self.rejected.load(Ordering::Relaxed)
+    }
+
+    fn bytes(&self) -> u64 {
+        self.bytes
     }
 
     fn take_error(&self) -> Option<String> {

@@ -95,6 +95,8 @@ pub trait Accel: Send + Sync {
     fn rejected_rays(&self) -> u64 {
         0
     }
+    /// Bytes of the acceleration structure (not counting the mesh it shares).
+    fn bytes(&self) -> u64;
     /// An error the backend reported while tracing, if any, clearing it (Embree's device
     /// errors are not checked per ray, only here and on setup calls).
     fn take_error(&self) -> Option<String> {

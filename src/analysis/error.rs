@@ -380,7 +380,9 @@ pub enum EstimateError {
     NoBatches,
     #[error("no image row lies between {0} and {1} degrees; widen the band or the image")]
     NoRows(f64, f64),
-    #[error("the images differ in size or samples per pixel")]
+    #[error(
+        "the images differ in size, or their samples are split into batches differently (films of different spp need spp a multiple of the batch count)"
+    )]
     Mismatch,
 }
 
@@ -416,9 +418,25 @@ struct RowDiff {
     half: [Vec<f64>; 2],
 }
 
-fn row_diff(scen: &Batches, base: &Batches, y: usize, w: usize) -> RowDiff {
+/// How much each batch difference weighs in a pixel's difference: its sample count when both
+/// films split their samples alike (the difference is then the difference of the images);
+/// equal weights when each film's batches hold equal counts (films of different spp, each a
+/// multiple of the batch count); `None` otherwise.
+fn batch_weights(scen: &Batches, base: &Batches) -> Option<Vec<f64>> {
+    let uniform = |b: &Batches| b.spp.iter().all(|&c| c == b.spp[0] && c > 0);
+    if scen.k != base.k {
+        None
+    } else if scen.spp == base.spp {
+        Some(scen.spp.iter().map(|&c| c as f64).collect())
+    } else if uniform(scen) && uniform(base) {
+        Some(vec![1.0; scen.k])
+    } else {
+        None
+    }
+}
+
+fn row_diff(scen: &Batches, base: &Batches, n_b: &[f64], y: usize, w: usize) -> RowDiff {
     let k = scen.k;
-    let n_b: Vec<f64> = scen.spp.iter().map(|&c| c as f64).collect();
     let n: f64 = n_b.iter().sum();
     let half_n = |h: usize| (h..k).step_by(2).map(|b| n_b[b]).sum::<f64>();
     let hn = [half_n(0), half_n(1)];
@@ -451,14 +469,13 @@ fn table(inp: &Inputs) -> Result<Table, EstimateError> {
     if bb.k < 2 {
         return Err(EstimateError::TooFewSamples(base.spp));
     }
+    let mut weights = Vec::new();
     for (_, f) in &inp.scenarios {
         let b = f.batches.as_ref().ok_or(EstimateError::NoBatches)?;
-        if b.k != bb.k
-            || b.spp != bb.spp
-            || (f.image.width, f.image.height) != (base.image.width, base.image.height)
-        {
+        if (f.image.width, f.image.height) != (base.image.width, base.image.height) {
             return Err(EstimateError::Mismatch);
         }
+        weights.push(batch_weights(b, bb).ok_or(EstimateError::Mismatch)?);
     }
     let (top, bottom) = inp.rows_deg;
     let w = base.image.width;
@@ -474,17 +491,18 @@ fn table(inp: &Inputs) -> Result<Table, EstimateError> {
     let block_px = ((BLOCK_DEG / 360.0 * w as f64).round() as usize).clamp(1, w);
     let blocks = w.div_ceil(block_px);
     let trend_px = ((TREND_DEG / 360.0 * w as f64).round() as usize).clamp(1, w) | 1;
-    let n: f64 = bb.spp.iter().map(|&c| c as f64).sum();
-    let half_n = |h: usize| (h..bb.k).step_by(2).map(|b| bb.spp[b] as f64).sum::<f64>();
-    let hn = [half_n(0), half_n(1)];
     let sums = inp
         .scenarios
         .par_iter()
-        .map(|(_, film)| {
+        .zip(&weights)
+        .map(|((_, film), n_b)| {
             let fb = film.batches.as_ref().expect("checked above");
+            let n: f64 = n_b.iter().sum();
+            let half_n = |h: usize| (h..bb.k).step_by(2).map(|b| n_b[b]).sum::<f64>();
+            let hn = [half_n(0), half_n(1)];
             rows.iter()
                 .map(|&y| {
-                    let r = row_diff(fb, bb, y, w);
+                    let r = row_diff(fb, bb, n_b, y, w);
                     let trend = moving_average(&r.d, trend_px);
                     let mut out = vec![Sums::default(); blocks];
                     for x in 0..w {
@@ -740,6 +758,27 @@ impl Estimator {
                 0.0
             },
         }
+    }
+}
+
+impl Estimator {
+    /// Root-mean-square difference of scenario `k` from the baseline over every analysed
+    /// pixel (mean difference included), noise-corrected, over `scale` (e.g. the baseline's
+    /// mean luminance, for a relative error), with its interval.
+    pub fn rms_difference(&self, k: usize, scale: f64) -> Interval {
+        let rms = |rows: &[Sums]| {
+            let (mut sq, mut px) = (0.0, 0.0);
+            for s in rows {
+                // Sum of D^2 less the noise variances: an unbiased sum of squared true differences.
+                sq += s.d[1] - s.d[2];
+                px += s.n;
+            }
+            (sq / px.max(1.0)).max(0.0).sqrt() / scale
+        };
+        Interval::new(
+            rms(&self.point[k]),
+            self.replicates.iter().map(|r| rms(&r[k])).collect(),
+        )
     }
 }
 

@@ -5,5 +5,6 @@
 //! intervals ([`error`]); [`plot`] draws them (the paper's Figure 5) and the renders side by
 //! side (Figure 4). `crate::app::compare` runs the scenarios.
 
+pub mod charts;
 pub mod error;
 pub mod plot;

@@ -34,7 +34,7 @@ fn font() -> Result<(), String> {
 }
 
 /// Draws into an RGB buffer and writes it as PNG (atomically).
-fn draw_png(
+pub(crate) fn draw_png(
     path: &Path,
     size: (u32, u32),
     draw: impl FnOnce(DrawingArea<BitMapBackend, plotters::coord::Shift>) -> Result<(), String>,

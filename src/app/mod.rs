@@ -6,6 +6,7 @@
 //! Every job returns [`AppError`], which says whether the user's input was at fault (exit code
 //! 2) or the run failed (exit code 1).
 
+pub mod bench;
 pub mod compare;
 #[cfg(feature = "embree")]
 pub mod crosscheck;

@@ -1,6 +1,7 @@
 //! Flags (clap derive) and how each command's flags become an `app` job: one file per
 //! command group, each with its flags, their mapping onto the job and nothing else.
 
+mod bench;
 #[cfg(feature = "embree")]
 mod embree;
 mod mesh;
@@ -50,6 +51,10 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Benchmarks that write reports: `accuracy` (run time against error) and `bvh` (BVH build
+    /// time against triangle count).
+    #[command(subcommand)]
+    Bench(bench::BenchCommand),
     /// Render a scene: ocean -> LOD tessellation -> BVH (Embree or Rust) -> path tracing -> EXR + PNG + JSON.
     Render(scene::RenderArgs),
     /// The paper's four scenarios (high/low tessellation x with/without normal mapping) and the
@@ -75,6 +80,7 @@ enum Command {
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Info { threads, json } => emit(&app::info::run(threads)?, json),
+        Command::Bench(c) => bench::run(c),
         Command::Render(a) => emit(&app::render::run(&a.job()?)?, a.json),
         Command::Compare(a) => emit(&app::compare::run(&a.job()?)?, a.json),
         #[cfg(feature = "embree")]

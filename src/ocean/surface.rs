@@ -275,6 +275,14 @@ impl Surface {
         }
     }
 
+    /// Bytes of the layers' gridded fields (what sampling the ocean reads).
+    pub fn bytes(&self) -> usize {
+        self.layers
+            .iter()
+            .map(|l| std::mem::size_of_val(l.fields()))
+            .sum()
+    }
+
     pub fn layers(&self) -> &[Layer] {
         &self.layers
     }

@@ -67,6 +67,13 @@ impl Bvh {
         self.build_seconds
     }
 
+    /// Bytes of the built structure: nodes, triangles copied into leaf order, and their ids.
+    pub fn bytes(&self) -> usize {
+        std::mem::size_of_val(self.nodes.as_slice())
+            + std::mem::size_of_val(self.tris.as_slice())
+            + std::mem::size_of_val(self.prims.as_slice())
+    }
+
     pub fn node_count(&self) -> usize {
         // Without the padding node.
         2 * self.nodes.len() - 1
@@ -162,6 +169,10 @@ impl Accel for Bvh {
 
     fn rejected_rays(&self) -> u64 {
         self.rejected.load(Ordering::Relaxed)
+    }
+
+    fn bytes(&self) -> u64 {
+        Bvh::bytes(self) as u64
     }
 }
 

@@ -1,0 +1,84 @@
+//! `bench accuracy` and `bench bvh`: the reports behind the README's speed and accuracy figures.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Subcommand;
+use vastocean::app::{self, AppError};
+use vastocean::config::SceneConfig;
+
+use crate::emit;
+
+#[derive(Subcommand)]
+pub enum BenchCommand {
+    /// The speed / accuracy frontier of one scene: tessellation x normals x spp, each timed
+    /// and its error measured against a converged reference (frontier.csv, frontier.png,
+    /// summary.json).
+    Accuracy {
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+        /// Scene file (TOML); without one, the default scene with the sun clipped to radiance
+        /// 100 (see the README). Its camera becomes a panorama.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// A reduced sweep (256 px, 4 tessellations, 8 to 128 spp): about a minute on 2 cores.
+        #[arg(long)]
+        quick: bool,
+        /// Worker threads (0 = all cores).
+        #[arg(long, default_value_t = 0)]
+        threads: usize,
+        #[arg(long)]
+        json: bool,
+    },
+    /// BVH build time against triangle count for every backend and build quality, and trace
+    /// speed, on ocean meshes from 10^3 to 22.3 M triangles (bvh.csv, bvh.png, summary.json).
+    #[cfg(feature = "embree")]
+    Bvh {
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+        /// 10^3 to 10^6 triangles only.
+        #[arg(long)]
+        quick: bool,
+        /// Worker threads (0 = all cores).
+        #[arg(long, default_value_t = 0)]
+        threads: usize,
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+pub fn run(c: BenchCommand) -> Result<()> {
+    match c {
+        #[rustfmt::skip]
+        BenchCommand::Accuracy { out, config, quick, threads, json } => {
+            let mut scene = match &config {
+                Some(path) => SceneConfig::load(path).map_err(AppError::from)?,
+                None => app::bench::accuracy::AccuracyJob::default_scene(),
+            };
+            scene.render.threads = threads;
+            let mut job = if quick {
+                app::bench::accuracy::AccuracyJob::quick(scene, out)
+            } else {
+                app::bench::accuracy::AccuracyJob::full(scene, out)
+            };
+            job.progress = true;
+            emit(&app::bench::accuracy::run(&job)?, json)
+        }
+        #[cfg(feature = "embree")]
+        BenchCommand::Bvh {
+            out,
+            quick,
+            threads,
+            json,
+        } => {
+            let job = if quick {
+                app::bench::bvh::BvhBenchJob::quick(out, threads)
+            } else {
+                app::bench::bvh::BvhBenchJob::full(out, threads)
+            };
+            emit(&app::bench::bvh::run(&job)?, json)
+        }
+    }
+}
