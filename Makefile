@@ -3,12 +3,13 @@
 
 CARGO      ?= cargo
 # Debian packages the build needs: Embree (headers + library), libclang for bindgen,
-# a C compiler for the shim, and a font for the labels of plots.
-DEB_PKGS   := libembree-dev libclang-dev pkg-config gcc fonts-dejavu-core
+# a C compiler for the shim, a font for the labels of plots, and GNU parallel, which runs the
+# study's cases (and its test).
+DEB_PKGS   := libembree-dev libclang-dev pkg-config gcc fonts-dejavu-core parallel
 SUDO       := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 OUT        ?= out
 
-.PHONY: setup build run test test-full bench bench-report lint embree4-check clean
+.PHONY: setup build run test test-full bench bench-report study lint embree4-check clean
 
 # Installs only the packages that are missing; apt-get update runs only when something is.
 setup:
@@ -49,6 +50,19 @@ bench: setup
 bench-report: build
 	./target/release/vastocean bench bvh --out benches/results/bvh
 	./target/release/vastocean bench accuracy --out benches/results/accuracy
+
+# The paper's study (README "Reproducing the paper's study"): plans STUDY if it has no plan
+# yet (STUDY_FLAGS go to `study plan`), runs its unfinished cases with GNU parallel, one case per
+# core, then summarizes. Interrupt it at will: finished cases are kept, the rest rerun.
+STUDY       ?= out/study
+STUDY_FLAGS ?= --cases 93 --seed 1 --width 1024 --spp 128 --clip-sun 100
+JOBS        ?= $(shell nproc)
+study: build
+	@[ -f $(STUDY)/plan.toml ] || ./target/release/vastocean study plan --out $(STUDY) $(STUDY_FLAGS)
+	n=$$(sed -n 's/^cases = //p' $(STUDY)/plan.toml); \
+	seq 1 $$n | parallel -j $(JOBS) --halt never --joblog $(STUDY)/joblog \
+	  ./target/release/vastocean study run $(STUDY) --threads 1 --case {} '>>' $(STUDY)/cases/{}/run.log '2>&1'; \
+	status=$$?; ./target/release/vastocean study summarize $(STUDY); exit $$status
 
 lint: setup
 	$(CARGO) fmt --check

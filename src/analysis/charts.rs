@@ -220,3 +220,105 @@ pub fn frontier(
         Ok(())
     })
 }
+
+/// One case on the study's scatter chart.
+pub struct ScatterPoint {
+    pub x: f64,
+    pub x_ci: [f64; 2],
+    pub y: f64,
+    pub y_ci: [f64; 2],
+    /// Which colour group (e.g. which sky).
+    pub group: usize,
+}
+
+/// The paper's Figure 10: one point per case with its interval bars on both axes, coloured by
+/// group, on equal linear axes from 0 with the line y = x (below it, y is the smaller).
+pub fn scatter(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    groups: &[&str],
+    points: &[ScatterPoint],
+) -> Result<(), String> {
+    draw_png(path, (1250, 900), |root| {
+        let e = |e: DrawingAreaErrorKind<_>| e.to_string();
+        root.fill(&WHITE).map_err(e)?;
+        let hi = points
+            .iter()
+            .flat_map(|p| [p.x, p.y, p.x_ci[1], p.y_ci[1]])
+            .filter(|v| v.is_finite())
+            .fold(1e-6, f64::max)
+            * 1.05;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 17))
+            .margin(14)
+            .x_label_area_size(48)
+            .y_label_area_size(80)
+            .build_cartesian_2d(0.0..hi, 0.0..hi)
+            .map_err(e)?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .label_style(("sans-serif", 15))
+            .axis_desc_style(("sans-serif", 16))
+            .draw()
+            .map_err(e)?;
+        chart
+            .draw_series(LineSeries::new(
+                [(0.0, 0.0), (hi, hi)],
+                BLACK.stroke_width(1),
+            ))
+            .map_err(e)?
+            .label("equal (below: mapping helps)")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+        // Twenty groups need more colours than the palette: cycle the palette, and the marker
+        // shape (circle, then triangle, then square) by which round of the palette it is.
+        for (g, name) in groups.iter().enumerate() {
+            let color = PALETTE[g % PALETTE.len()];
+            let shape = g / PALETTE.len() % 3;
+            let mine: Vec<&ScatterPoint> = points.iter().filter(|p| p.group == g).collect();
+            let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
+            chart
+                .draw_series(mine.iter().flat_map(|p| {
+                    [
+                        PathElement::new(
+                            vec![(finite(p.x_ci[0]), p.y), (finite(p.x_ci[1]), p.y)],
+                            color.mix(0.45).stroke_width(1),
+                        ),
+                        PathElement::new(
+                            vec![(p.x, finite(p.y_ci[0])), (p.x, finite(p.y_ci[1]))],
+                            color.mix(0.45).stroke_width(1),
+                        ),
+                    ]
+                }))
+                .map_err(e)?;
+            let marker = move |c: (f64, f64)| -> DynElement<'static, BitMapBackend, (f64, f64)> {
+                match shape {
+                    0 => Circle::new(c, 5, color.filled()).into_dyn(),
+                    1 => TriangleMarker::new(c, 6, color.filled()).into_dyn(),
+                    _ => Cross::new(c, 5, color.stroke_width(2)).into_dyn(),
+                }
+            };
+            chart
+                .draw_series(mine.iter().map(|p| marker((p.x, p.y))))
+                .map_err(e)?
+                .label(*name)
+                .legend(move |(x, y)| match shape {
+                    0 => Circle::new((x + 10, y), 5, color.filled()).into_dyn(),
+                    1 => TriangleMarker::new((x + 10, y), 6, color.filled()).into_dyn(),
+                    _ => Cross::new((x + 10, y), 5, color.stroke_width(2)).into_dyn(),
+                });
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 13))
+            .position(SeriesLabelPosition::UpperLeft)
+            .draw()
+            .map_err(e)?;
+        Ok(())
+    })
+}

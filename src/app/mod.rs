@@ -17,6 +17,7 @@ pub mod render;
 pub mod sky;
 #[cfg(feature = "embree")]
 pub mod smoke;
+pub mod study;
 
 use std::error::Error;
 

@@ -8,6 +8,7 @@ mod mesh;
 mod ocean;
 mod scene;
 mod sky;
+mod study;
 
 use anyhow::Result;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
@@ -72,6 +73,10 @@ enum Command {
     /// photograph with the ground removed, report statistics, make a contact sheet.
     #[command(subcommand)]
     Sky(sky::SkyCommand),
+    /// The paper's study of many random cases (its 93): plan them into a folder, run each
+    /// (GNU parallel, a Slurm job array), summarize (its Figure 10 and counts).
+    #[command(subcommand)]
+    Study(study::StudyCommand),
     /// Embree smoke run: build a BVH over a wavy grid and trace random rays down onto it.
     #[cfg(feature = "embree")]
     Smoke(embree::SmokeArgs),
@@ -92,6 +97,7 @@ pub fn run(cli: Cli) -> Result<()> {
             emit(&r, a.json)
         }
         Command::Sky(c) => sky::run(c),
+        Command::Study(c) => study::run(c),
         #[cfg(feature = "embree")]
         Command::Smoke(a) => emit(&app::smoke::run(&a.job())?, a.json),
     }

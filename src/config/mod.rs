@@ -245,6 +245,11 @@ impl SkyConfig {
         if !(self.scale >= 0.0 && self.scale.is_finite()) {
             return Err(invalid("sky.scale", "finite and >= 0", self.scale));
         }
+        if let Some(c) = self.clip_relative
+            && !(c >= 1.0 && c.is_finite())
+        {
+            return Err(invalid("sky.clip_relative", "finite and >= 1", c));
+        }
         Ok(())
     }
 }

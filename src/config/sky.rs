@@ -46,6 +46,11 @@ pub struct SkyConfig {
     /// Sky dome altitude, m (the paper: 200 km); absent = at infinity.
     pub dome_altitude_m: Option<f64>,
     pub scale: f32,
+    /// Clip a sky map as a photograph clips the sun: texels brighter (in luminance) than
+    /// `clip_relative` times the median luminance of the map above the horizon are scaled down
+    /// to it. Absent = the map as it is. (The paper's skies were photographs with clipped suns.)
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clip_relative: Option<f32>,
 }
 
 impl Default for SkyConfig {
@@ -55,6 +60,7 @@ impl Default for SkyConfig {
             analytic: AnalyticSky::default(),
             dome_altitude_m: Some(200_000.0),
             scale: 1.0,
+            clip_relative: None,
         }
     }
 }

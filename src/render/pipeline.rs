@@ -115,6 +115,9 @@ pub fn make_sky(cfg: &SceneConfig) -> Result<Sky, RenderError> {
         Some(f) => Sky::load(f)?,
         None => Sky::analytic(cfg.sky.analytic),
     };
+    if let (Some(c), crate::sky::SkySource::Map(img)) = (cfg.sky.clip_relative, &mut sky.source) {
+        crate::sky::tools::clip_relative(img, c);
+    }
     sky.dome_altitude_m = cfg.sky.dome_altitude_m;
     sky.earth_radius_m = EARTH_RADIUS_M;
     sky.camera_height_m = cfg.camera.height_m;

@@ -192,6 +192,29 @@ pub fn remove_ground(img: &mut RgbImage, ground: Ground) {
     }
 }
 
+/// Clips the map as a photograph clips the sun: texels whose luminance exceeds `factor` times
+/// the median luminance above the horizon are scaled down to that luminance (hue kept).
+/// Returns the clip luminance and how many texels it touched.
+pub fn clip_relative(img: &mut RgbImage, factor: f32) -> (f32, usize) {
+    let upper = img.width * (img.height / 2);
+    let mut lum: Vec<f32> = img.pixels[..upper].iter().map(|&c| luminance(c)).collect();
+    if lum.is_empty() {
+        return (0.0, 0);
+    }
+    let mid = lum.len() / 2;
+    let (_, median, _) = lum.select_nth_unstable_by(mid, f32::total_cmp);
+    let limit = factor * *median;
+    let mut clipped = 0;
+    for p in &mut img.pixels {
+        let l = luminance(*p);
+        if l > limit && l > 0.0 {
+            *p = p.map(|c| c * limit / l);
+            clipped += 1;
+        }
+    }
+    (limit, clipped)
+}
+
 /// Sets negative (finite) components to zero, as colour-space conversions leave in real HDR
 /// photographs; returns how many there were and the most negative. NaN and infinity stay, for
 /// validation to reject.
@@ -263,6 +286,19 @@ pub fn contact_sheet(maps: &[RgbImage], thumb_width: usize, columns: usize) -> (
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn clipping_caps_the_sun_at_a_multiple_of_the_median_sky() {
+        let mut img = RgbImage::new(8, 4);
+        img.pixels.iter_mut().for_each(|p| *p = [1.0; 3]);
+        img.pixels[3] = [5000.0, 4000.0, 3000.0];
+        let (limit, n) = clip_relative(&mut img, 100.0);
+        assert_eq!((limit, n), (100.0, 1));
+        assert!((luminance(img.pixels[3]) - 100.0).abs() < 1e-3);
+        // the hue stays: R > G > B
+        assert!(img.pixels[3][0] > img.pixels[3][1] && img.pixels[3][1] > img.pixels[3][2]);
+        assert_eq!(img.pixels[4], [1.0; 3]);
+    }
 
     #[test]
     fn blur_row_keeps_the_mean_and_wraps() {

@@ -1,0 +1,579 @@
+//! `vastocean study plan | run | summarize`: the paper's study of many random cases (its 93,
+//! Figure 10), runnable on one machine or a cluster. `plan` draws the cases from a seed and
+//! writes one scene file per case plus `plan.toml` (the settings every case shares) into a
+//! study folder with a copy of the skies it uses, so the folder is the study's single source of
+//! truth and travels to a cluster whole. `run` runs one case's comparison into
+//! `cases/K/`, its `summary.json` written last and atomically, so a case with a summary is
+//! finished and is skipped (resumable), and an interrupted one is redone. Cases are independent:
+//! any scheduler (GNU parallel, a Slurm job array) can run them. `summarize` gathers the
+//! finished cases into `cases.csv`, `per_sky.csv`, `scatter.png` and `summary.json`.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use super::AppError;
+use super::compare::{CompareJob, CompareSummary};
+use crate::analysis::charts::{ScatterPoint, scatter};
+use crate::config::{LodConfig, Projection, SceneConfig};
+use crate::image_io::{stage, write_atomically, write_json};
+use crate::rng::Rng;
+
+/// Where the cases' sea states are drawn from. The ranges cover the paper's Table 1 (wind
+/// 1.3-4.91 m/s, RMS height 0.098-0.548 m, fetch 99.95-204.5 km, depth 150.9-997.9 m) with a
+/// margin on each side. Wind is uniform; fetch, depth and RMS height, scale parameters spanning
+/// factors of 3 to 12, are log-uniform, so each octave is drawn as often. The RMS height is
+/// drawn independently of the wind, as the paper's cases pair them (its Table 1 follows no
+/// single wind-height law); it sets the amplitude, wind, fetch and depth the spectrum's shape.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Ranges {
+    pub wind_m_s: (f64, f64),
+    pub fetch_km: (f64, f64),
+    pub depth_m: (f64, f64),
+    pub rms_m: (f64, f64),
+}
+
+pub const RANGES: Ranges = Ranges {
+    wind_m_s: (1.0, 6.0),
+    fetch_km: (80.0, 250.0),
+    depth_m: (100.0, 1200.0),
+    rms_m: (0.08, 0.6),
+};
+
+/// `plan.toml`: what every case shares, and how the cases were drawn.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Plan {
+    pub cases: usize,
+    pub seed: u64,
+    /// The tessellations compared (the baseline and the low one; a case's own `[lod]` section
+    /// is not used) and the analysed rows (the paper: 0 to -5 degrees).
+    pub high: LodConfig,
+    pub low: LodConfig,
+    pub rows_deg: (f64, f64),
+    /// Sky maps the cases draw from, in `skies/` beside this file.
+    pub skies: Vec<String>,
+    pub ranges: Ranges,
+}
+
+/// What `study plan` is asked for.
+#[derive(Clone, Debug)]
+pub struct PlanJob {
+    pub out: PathBuf,
+    pub cases: usize,
+    pub seed: u64,
+    /// The scene every case starts from (camera, render settings, water); each case draws its
+    /// sea state, sky and seeds. Its camera becomes the paper's panorama band, +1 to -6 degrees.
+    pub base: SceneConfig,
+    pub high: LodConfig,
+    pub low: LodConfig,
+    /// The sky collection to draw from.
+    pub skies_dir: PathBuf,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct PlanReport {
+    pub dir: PathBuf,
+    pub cases: usize,
+    pub skies: usize,
+    pub plan: PathBuf,
+}
+
+fn case_dir(dir: &Path, k: usize) -> PathBuf {
+    dir.join("cases").join(k.to_string())
+}
+
+/// Case `k`'s scene (1-based), drawn from the seed, and its sky's file name.
+fn draw_case(job: &PlanJob, skies: &[String], k: usize) -> (SceneConfig, String) {
+    let mut r = Rng::keyed(&[job.seed, 0x7374_7564, k as u64]);
+    let uniform = |r: &mut Rng, (lo, hi): (f64, f64)| lo + (hi - lo) * r.f64();
+    let log_uniform = |r: &mut Rng, (lo, hi): (f64, f64)| {
+        (f64::ln(lo) + (f64::ln(hi) - f64::ln(lo)) * r.f64()).exp()
+    };
+    let mut s = job.base.clone();
+    s.ocean.wind_speed = uniform(&mut r, RANGES.wind_m_s);
+    s.ocean.fetch_km = log_uniform(&mut r, RANGES.fetch_km);
+    s.ocean.depth_m = log_uniform(&mut r, RANGES.depth_m);
+    s.ocean.rms_m = Some(log_uniform(&mut r, RANGES.rms_m));
+    let sky = skies[((r.f64() * skies.len() as f64) as usize).min(skies.len() - 1)].clone();
+    // Relative to the case's scene file, cases/K/scene.toml.
+    s.sky.file = Some(Path::new("../../skies").join(&sky));
+    s.camera.projection = Projection::Equirect {
+        band_deg: Some((1.0, -6.0)),
+    };
+    s.render.seed = k as u64;
+    s.render.ocean_seed = k as u64;
+    // What `vastocean render --config cases/K/scene.toml` shows: the low tessellation. (`study
+    // run` takes both tessellations from the plan.)
+    s.lod = job.low.clone();
+    (s, sky)
+}
+
+/// Draws the cases and writes the study folder. Refuses a folder that already holds a plan.
+pub fn plan(job: &PlanJob) -> Result<PlanReport, AppError> {
+    if job.cases == 0 || job.cases > 100_000 {
+        return Err(AppError::input(format!(
+            "--cases must be in 1..=100000 (got {})",
+            job.cases
+        )));
+    }
+    let plan_path = job.out.join("plan.toml");
+    if plan_path.exists() {
+        return Err(AppError::input(format!(
+            "{} exists: a study folder holds one plan (edit its case files, or plan into a new folder)",
+            plan_path.display()
+        )));
+    }
+    let mut skies: Vec<String> = std::fs::read_dir(&job.skies_dir)
+        .map_err(|e| {
+            AppError::Input(format!("cannot read {}: {e}", job.skies_dir.display()).into())
+        })?
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".exr"))
+        .collect();
+    skies.sort();
+    if skies.is_empty() {
+        return Err(AppError::input(format!(
+            "{} holds no .exr sky maps",
+            job.skies_dir.display()
+        )));
+    }
+    let mut scenes = Vec::new();
+    for k in 1..=job.cases {
+        let (s, sky) = draw_case(job, &skies, k);
+        // Checked before anything is written.
+        let mut check = s.clone();
+        check.sky.file = Some(job.skies_dir.join(sky));
+        check.validate()?;
+        for lod in [&job.high, &job.low] {
+            lod.validate()?;
+            crate::lod::params_for(lod, &check.camera)?;
+        }
+        scenes.push(s);
+    }
+    for name in &skies {
+        let dst = job.out.join("skies").join(name);
+        let bytes = std::fs::read(job.skies_dir.join(name))
+            .map_err(|e| AppError::Input(format!("cannot read sky {name}: {e}").into()))?;
+        write_atomically(&dst, |w| std::io::Write::write_all(w, &bytes))?;
+    }
+    for (i, s) in scenes.iter().enumerate() {
+        let text = toml::to_string(s).map_err(|e| AppError::Run(e.into()))?;
+        let path = case_dir(&job.out, i + 1).join("scene.toml");
+        write_atomically(&path, |w| std::io::Write::write_all(w, text.as_bytes()))?;
+    }
+    let plan = Plan {
+        cases: job.cases,
+        seed: job.seed,
+        high: job.high.clone(),
+        low: job.low.clone(),
+        rows_deg: (0.0, -5.0),
+        skies: skies.clone(),
+        ranges: RANGES,
+    };
+    let text = toml::to_string(&plan).map_err(|e| AppError::Run(e.into()))?;
+    // The plan last: a folder with a plan.toml has all its cases.
+    write_atomically(&plan_path, |w| {
+        std::io::Write::write_all(w, text.as_bytes())
+    })?;
+    Ok(PlanReport {
+        dir: job.out.clone(),
+        cases: job.cases,
+        skies: skies.len(),
+        plan: plan_path,
+    })
+}
+
+/// Reads a study folder's plan.
+pub fn read_plan(dir: &Path) -> Result<Plan, AppError> {
+    let path = dir.join("plan.toml");
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        AppError::Input(format!("cannot read {} (not a study folder?): {e}", path.display()).into())
+    })?;
+    toml::from_str(&text).map_err(|e| AppError::Input(format!("{}: {e}", path.display()).into()))
+}
+
+/// What `study run` did with a case.
+#[derive(Clone, Debug, Serialize)]
+pub enum CaseOutcome {
+    /// It was finished already (its summary exists); nothing was done.
+    Skipped(usize),
+    Ran(usize, Box<CompareSummary>),
+}
+
+/// Runs case `k` (1-based) of the study in `dir` into `cases/K/`, unless it is finished and
+/// `force` is not set. `threads` overrides the case's own thread count when set.
+pub fn run_case(
+    dir: &Path,
+    k: usize,
+    force: bool,
+    threads: Option<usize>,
+    progress: bool,
+) -> Result<CaseOutcome, AppError> {
+    let plan = read_plan(dir)?;
+    if k == 0 || k > plan.cases {
+        return Err(AppError::input(format!(
+            "case {k} is not in the plan (1..={})",
+            plan.cases
+        )));
+    }
+    let cdir = case_dir(dir, k);
+    if cdir.join("summary.json").exists() && !force {
+        return Ok(CaseOutcome::Skipped(k));
+    }
+    let mut scene = SceneConfig::load(&cdir.join("scene.toml"))?;
+    if progress {
+        // Plain lines: a batch job's log has no terminal.
+        eprintln!("case {k}: running into {}", cdir.display());
+    }
+    if let Some(t) = threads {
+        scene.render.threads = t;
+    }
+    let job = CompareJob {
+        high: plan.high,
+        low: plan.low,
+        scene,
+        rows_deg: plan.rows_deg,
+        out: cdir,
+        progress,
+    };
+    // compare writes summary.json last, atomically.
+    let s = super::compare::run(&job)?;
+    Ok(CaseOutcome::Ran(k, Box::new(s)))
+}
+
+/// One finished case, as `cases.csv` has it.
+#[derive(Clone, Debug, Serialize)]
+pub struct CaseRow {
+    pub case: usize,
+    pub wind_m_s: f64,
+    pub fetch_km: f64,
+    pub depth_m: f64,
+    pub rms_m: f64,
+    pub sky: String,
+    pub sun_elevation_deg: f64,
+    pub std_high_unmapped_corrected: f64,
+    pub std_low_mapped_corrected: f64,
+    pub std_low_mapped_ci: [f64; 2],
+    pub std_low_unmapped_corrected: f64,
+    pub std_low_unmapped_ci: [f64; 2],
+    pub improvement_ratio: f64,
+    pub improvement_ratio_corrected: f64,
+    pub improvement_ratio_ci: [f64; 2],
+    pub improvement_significant: bool,
+    pub improvement_ratio_without_glint: f64,
+    pub glint_rows: usize,
+    pub noise_model_check: f64,
+    pub seconds_total: f64,
+}
+
+/// `study summarize`'s `summary.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct StudySummary {
+    pub cases: usize,
+    pub finished: usize,
+    pub missing: Vec<usize>,
+    /// Cases whose noise-corrected ratio (low unmapped / low mapped) exceeds 1.
+    pub improved: usize,
+    /// ... whose ratio's 95 % interval lies above 1, or below it.
+    pub improved_significant: usize,
+    pub worse_significant: usize,
+    pub median_ratio: f64,
+    pub ratio_quartiles: [f64; 2],
+    pub seconds_total: f64,
+    pub rows: Vec<CaseRow>,
+    pub cases_csv: PathBuf,
+    pub per_sky_csv: PathBuf,
+    pub scatter_png: PathBuf,
+}
+
+fn quartiles(v: &[f64]) -> (f64, [f64; 2]) {
+    let mut s: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    s.sort_by(f64::total_cmp);
+    if s.is_empty() {
+        return (f64::NAN, [f64::NAN; 2]);
+    }
+    let q = |p: f64| {
+        let x = p * (s.len() - 1) as f64;
+        let (i, f) = (x.floor() as usize, x - x.floor());
+        s[i] * (1.0 - f) + s[(i + 1).min(s.len() - 1)] * f
+    };
+    (q(0.5), [q(0.25), q(0.75)])
+}
+
+/// The sun's elevation in a case's sky map (its brightest region), degrees.
+fn sun_elevation(scene: &SceneConfig) -> f64 {
+    scene
+        .sky
+        .file
+        .as_ref()
+        .and_then(|f| crate::image_io::read_exr(f).ok())
+        .map_or(f64::NAN, |img| crate::sky::tools::find_sun(&img).0)
+}
+
+/// Gathers the finished cases of the study in `dir`.
+pub fn summarize(dir: &Path) -> Result<StudySummary, AppError> {
+    let plan = read_plan(dir)?;
+    let mut rows = Vec::new();
+    let mut missing = Vec::new();
+    let mut suns = std::collections::HashMap::new();
+    for k in 1..=plan.cases {
+        let cdir = case_dir(dir, k);
+        let Ok(text) = std::fs::read_to_string(cdir.join("summary.json")) else {
+            missing.push(k);
+            continue;
+        };
+        let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+            AppError::Input(format!("{}: {e}", cdir.join("summary.json").display()).into())
+        })?;
+        let scene = SceneConfig::load(&cdir.join("scene.toml"))?;
+        let sky = scene
+            .sky
+            .file
+            .as_ref()
+            .and_then(|f| f.file_stem())
+            .map_or("analytic".into(), |n| n.to_string_lossy().into_owned());
+        let sun = *suns
+            .entry(sky.clone())
+            .or_insert_with(|| sun_elevation(&scene));
+        let f = |key: &str| v[key].as_f64().unwrap_or(f64::NAN);
+        let pair = |val: &serde_json::Value| {
+            [
+                val[0].as_f64().unwrap_or(f64::NAN),
+                val[1].as_f64().unwrap_or(f64::NAN),
+            ]
+        };
+        let scenario = |name: &str| {
+            v["estimates"]["scenarios"]
+                .as_array()
+                .and_then(|a| a.iter().find(|s| s["name"] == name))
+                .map_or([f64::NAN; 2], |s| pair(&s["std_corrected"]["ci"]))
+        };
+        rows.push(CaseRow {
+            case: k,
+            wind_m_s: scene.ocean.wind_speed,
+            fetch_km: scene.ocean.fetch_km,
+            depth_m: scene.ocean.depth_m,
+            rms_m: scene.ocean.rms_m.unwrap_or(f64::NAN),
+            sky,
+            sun_elevation_deg: sun,
+            std_high_unmapped_corrected: f("std_high_unmapped_corrected"),
+            std_low_mapped_corrected: f("std_low_mapped_corrected"),
+            std_low_mapped_ci: scenario("low_mapped"),
+            std_low_unmapped_corrected: f("std_low_unmapped_corrected"),
+            std_low_unmapped_ci: scenario("low_unmapped"),
+            improvement_ratio: f("improvement_ratio"),
+            improvement_ratio_corrected: f("improvement_ratio_corrected"),
+            improvement_ratio_ci: pair(&v["improvement_ratio_ci"]),
+            improvement_significant: v["improvement_significant"].as_bool().unwrap_or(false),
+            improvement_ratio_without_glint: v["improvement_ratio_without_glint"]["value"]
+                .as_f64()
+                .unwrap_or(f64::NAN),
+            glint_rows: v["estimates"]["scenarios"][0]["glint_rows_deg"]
+                .as_array()
+                .map_or(0, |a| a.len()),
+            noise_model_check: v["noise_model_check"]["value"].as_f64().unwrap_or(f64::NAN),
+            seconds_total: f("seconds_total"),
+        });
+    }
+    let ratios: Vec<f64> = rows.iter().map(|r| r.improvement_ratio_corrected).collect();
+    let (median_ratio, ratio_quartiles) = quartiles(&ratios);
+    let (cases_csv, per_sky_csv, scatter_png) = (
+        dir.join("cases.csv"),
+        dir.join("per_sky.csv"),
+        dir.join("scatter.png"),
+    );
+    write_outputs(&rows, &cases_csv, &per_sky_csv, &scatter_png)?;
+    let summary = StudySummary {
+        cases: plan.cases,
+        finished: rows.len(),
+        missing,
+        improved: ratios.iter().filter(|&&r| r > 1.0).count(),
+        improved_significant: rows
+            .iter()
+            .filter(|r| r.improvement_ratio_ci[0] > 1.0)
+            .count(),
+        worse_significant: rows
+            .iter()
+            .filter(|r| r.improvement_ratio_ci[1] < 1.0)
+            .count(),
+        median_ratio,
+        ratio_quartiles,
+        seconds_total: rows.iter().map(|r| r.seconds_total).sum(),
+        rows,
+        cases_csv,
+        per_sky_csv,
+        scatter_png,
+    };
+    write_json(&dir.join("summary.json"), &summary)?;
+    Ok(summary)
+}
+
+fn write_outputs(
+    rows: &[CaseRow],
+    cases_csv: &Path,
+    per_sky_csv: &Path,
+    scatter_png: &Path,
+) -> Result<(), AppError> {
+    use std::io::Write;
+    let cases = stage(cases_csv, |w| {
+        writeln!(
+            w,
+            "case,wind_m_s,fetch_km,depth_m,rms_m,sky,sun_elevation_deg,std_high_unmapped_corrected,std_low_mapped_corrected,std_low_mapped_lo,std_low_mapped_hi,std_low_unmapped_corrected,std_low_unmapped_lo,std_low_unmapped_hi,improvement_ratio,improvement_ratio_corrected,improvement_ratio_lo,improvement_ratio_hi,improvement_significant,improvement_ratio_without_glint,glint_rows,noise_model_check,seconds_total"
+        )?;
+        for r in rows {
+            writeln!(
+                w,
+                "{},{:.3},{:.2},{:.1},{:.4},{},{:.2},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.4},{:.4},{:.4},{:.4},{},{:.4},{},{:.3},{:.1}",
+                r.case,
+                r.wind_m_s,
+                r.fetch_km,
+                r.depth_m,
+                r.rms_m,
+                r.sky,
+                r.sun_elevation_deg,
+                r.std_high_unmapped_corrected,
+                r.std_low_mapped_corrected,
+                r.std_low_mapped_ci[0],
+                r.std_low_mapped_ci[1],
+                r.std_low_unmapped_corrected,
+                r.std_low_unmapped_ci[0],
+                r.std_low_unmapped_ci[1],
+                r.improvement_ratio,
+                r.improvement_ratio_corrected,
+                r.improvement_ratio_ci[0],
+                r.improvement_ratio_ci[1],
+                r.improvement_significant,
+                r.improvement_ratio_without_glint,
+                r.glint_rows,
+                r.noise_model_check,
+                r.seconds_total
+            )?;
+        }
+        Ok(())
+    })?;
+    let mut skies: Vec<&str> = rows.iter().map(|r| r.sky.as_str()).collect();
+    skies.sort();
+    skies.dedup();
+    let per_sky = stage(per_sky_csv, |w| {
+        writeln!(
+            w,
+            "sky,sun_elevation_deg,cases,improved,improved_significant,median_ratio,min_ratio,max_ratio"
+        )?;
+        for sky in &skies {
+            let mine: Vec<&CaseRow> = rows.iter().filter(|r| r.sky == *sky).collect();
+            let ratios: Vec<f64> = mine.iter().map(|r| r.improvement_ratio_corrected).collect();
+            let (med, _) = quartiles(&ratios);
+            let fold = |f: fn(f64, f64) -> f64, init: f64| ratios.iter().copied().fold(init, f);
+            writeln!(
+                w,
+                "{sky},{:.2},{},{},{},{:.3},{:.3},{:.3}",
+                mine[0].sun_elevation_deg,
+                mine.len(),
+                ratios.iter().filter(|&&r| r > 1.0).count(),
+                mine.iter()
+                    .filter(|r| r.improvement_ratio_ci[0] > 1.0)
+                    .count(),
+                med,
+                fold(f64::min, f64::INFINITY),
+                fold(f64::max, f64::NEG_INFINITY)
+            )?;
+        }
+        Ok(())
+    })?;
+    let points: Vec<ScatterPoint> = rows
+        .iter()
+        .map(|r| ScatterPoint {
+            x: r.std_low_unmapped_corrected,
+            x_ci: r.std_low_unmapped_ci,
+            y: r.std_low_mapped_corrected,
+            y_ci: r.std_low_mapped_ci,
+            group: skies.iter().position(|s| *s == r.sky).unwrap_or(0),
+        })
+        .collect();
+    scatter(
+        scatter_png,
+        &format!(
+            "{} cases: band-averaged std of the luminance difference from the baseline, rows 0 to -5 degrees, noise-corrected (95% intervals)",
+            rows.len()
+        ),
+        "low tessellation, vertex normals (unmapped)",
+        "low tessellation, normal mapped",
+        &skies,
+        &points,
+    )
+    .map_err(|m| AppError::Run(format!("cannot draw {}: {m}", scatter_png.display()).into()))?;
+    cases.commit()?;
+    per_sky.commit()?;
+    Ok(())
+}
+
+impl fmt::Display for PlanReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "planned {} cases over {} skies in {} (edit cases/K/scene.toml to change a case); run them with\n  parallel -j 2 vastocean study run {} --threads 1 --case {{}} ::: $(seq 1 {})",
+            self.cases,
+            self.skies,
+            self.dir.display(),
+            self.dir.display(),
+            self.cases
+        )
+    }
+}
+
+impl fmt::Display for CaseOutcome {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            CaseOutcome::Skipped(k) => write!(f, "case {k}: finished already (--force to rerun)"),
+            CaseOutcome::Ran(k, s) => write!(
+                f,
+                "case {k}: improvement ratio {:.2} [{:.2}, {:.2}]{} in {:.0} s",
+                s.improvement_ratio_corrected,
+                s.improvement_ratio_ci[0],
+                s.improvement_ratio_ci[1],
+                if s.improvement_significant {
+                    ", significant"
+                } else {
+                    ", not significant"
+                },
+                s.seconds_total
+            ),
+        }
+    }
+}
+
+impl fmt::Display for StudySummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "study: {} of {} cases finished{}",
+            self.finished,
+            self.cases,
+            if self.missing.is_empty() {
+                String::new()
+            } else {
+                format!(" (missing: {:?})", self.missing)
+            }
+        )?;
+        writeln!(
+            f,
+            "  normal mapping brought the low tessellation closer to the baseline in {} of {} cases ({} significantly); worse, significantly, in {}",
+            self.improved, self.finished, self.improved_significant, self.worse_significant
+        )?;
+        writeln!(
+            f,
+            "  improvement ratio (noise-corrected): median {:.2}, quartiles {:.2} to {:.2}",
+            self.median_ratio, self.ratio_quartiles[0], self.ratio_quartiles[1]
+        )?;
+        write!(
+            f,
+            "  wrote {} {} {}",
+            self.cases_csv.display(),
+            self.per_sky_csv.display(),
+            self.scatter_png.display()
+        )
+    }
+}
