@@ -323,6 +323,27 @@ fn study_plans_runs_through_gnu_parallel_resumes_and_summarizes() {
         assert!(study.join(format!("cases/{k}/summary.json")).is_file());
     }
 
+    // The Slurm job-array script, run as one array task would run it (sbatch reads the
+    // #SBATCH lines; to bash they are comments).
+    std::fs::remove_file(study.join("cases/3/summary.json")).unwrap();
+    let script =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/cluster/study.sbatch");
+    let task = std::process::Command::new("bash")
+        .arg(&script)
+        .arg(&study)
+        .env("SLURM_ARRAY_TASK_ID", "3")
+        .env("SLURM_CPUS_PER_TASK", "1")
+        .env("VASTOCEAN", env!("CARGO_BIN_EXE_vastocean"))
+        .output()
+        .unwrap();
+    assert!(
+        task.status.success(),
+        "{}",
+        String::from_utf8_lossy(&task.stderr)
+    );
+    assert!(String::from_utf8_lossy(&task.stdout).starts_with("case 3: improvement ratio"));
+    assert!(study.join("cases/3/summary.json").is_file());
+
     // A finished case is skipped: nothing is rewritten.
     let summary1 = study.join("cases/1/summary.json");
     let before = std::fs::metadata(&summary1).unwrap().modified().unwrap();

@@ -232,7 +232,9 @@ pub struct ScatterPoint {
 }
 
 /// The paper's Figure 10: one point per case with its interval bars on both axes, coloured by
-/// group, on equal linear axes from 0 with the line y = x (below it, y is the smaller).
+/// group, with the line y = x (below it, y is the smaller). Log-log axes, as the cases span
+/// orders of magnitude (sky maps in different units); values and bounds at or below zero are
+/// drawn at the bottom of the axis.
 pub fn scatter(
     path: &Path,
     title: &str,
@@ -244,51 +246,50 @@ pub fn scatter(
     draw_png(path, (1250, 900), |root| {
         let e = |e: DrawingAreaErrorKind<_>| e.to_string();
         root.fill(&WHITE).map_err(e)?;
-        let hi = points
-            .iter()
-            .flat_map(|p| [p.x, p.y, p.x_ci[1], p.y_ci[1]])
-            .filter(|v| v.is_finite())
-            .fold(1e-6, f64::max)
-            * 1.05;
+        let (lo, hi) = log_range(
+            points
+                .iter()
+                .flat_map(|p| [p.x, p.y, p.x_ci[0], p.x_ci[1], p.y_ci[0], p.y_ci[1]]),
+        );
+        let clamp = |v: f64| if v.is_finite() { v.clamp(lo, hi) } else { lo };
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 17))
             .margin(14)
             .x_label_area_size(48)
             .y_label_area_size(80)
-            .build_cartesian_2d(0.0..hi, 0.0..hi)
+            .build_cartesian_2d((lo..hi).log_scale(), (lo..hi).log_scale())
             .map_err(e)?;
         chart
             .configure_mesh()
             .x_desc(x_desc)
             .y_desc(y_desc)
+            .x_label_formatter(&log_label)
+            .y_label_formatter(&log_label)
             .label_style(("sans-serif", 15))
             .axis_desc_style(("sans-serif", 16))
             .draw()
             .map_err(e)?;
         chart
-            .draw_series(LineSeries::new(
-                [(0.0, 0.0), (hi, hi)],
-                BLACK.stroke_width(1),
-            ))
+            .draw_series(LineSeries::new([(lo, lo), (hi, hi)], BLACK.stroke_width(1)))
             .map_err(e)?
             .label("equal (below: mapping helps)")
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
-        // Twenty groups need more colours than the palette: cycle the palette, and the marker
-        // shape (circle, then triangle, then square) by which round of the palette it is.
+        // More groups than the palette has colours: cycle the palette, and the marker shape
+        // (circle, triangle, cross) by which round of the palette it is.
         for (g, name) in groups.iter().enumerate() {
             let color = PALETTE[g % PALETTE.len()];
             let shape = g / PALETTE.len() % 3;
             let mine: Vec<&ScatterPoint> = points.iter().filter(|p| p.group == g).collect();
-            let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
             chart
                 .draw_series(mine.iter().flat_map(|p| {
+                    let (x, y) = (clamp(p.x), clamp(p.y));
                     [
                         PathElement::new(
-                            vec![(finite(p.x_ci[0]), p.y), (finite(p.x_ci[1]), p.y)],
+                            vec![(clamp(p.x_ci[0]), y), (clamp(p.x_ci[1]), y)],
                             color.mix(0.45).stroke_width(1),
                         ),
                         PathElement::new(
-                            vec![(p.x, finite(p.y_ci[0])), (p.x, finite(p.y_ci[1]))],
+                            vec![(x, clamp(p.y_ci[0])), (x, clamp(p.y_ci[1]))],
                             color.mix(0.45).stroke_width(1),
                         ),
                     ]
@@ -302,7 +303,7 @@ pub fn scatter(
                 }
             };
             chart
-                .draw_series(mine.iter().map(|p| marker((p.x, p.y))))
+                .draw_series(mine.iter().map(|p| marker((clamp(p.x), clamp(p.y)))))
                 .map_err(e)?
                 .label(*name)
                 .legend(move |(x, y)| match shape {
