@@ -52,8 +52,9 @@ pub struct WriteError {
 
 /// A file written completely under a temporary name beside its destination, not yet renamed.
 /// [`Staged::commit`] renames it into place; dropping it uncommitted removes the temporary
-/// file, so every error path (and a panic) cleans up. Staging several files first and
-/// committing them after all were written makes a set of outputs appear together.
+/// file, so every error path (and a panic) cleans up. [`commit_all`] makes a set of staged
+/// files appear together, or not at all. Every temporary file is also listed in a process-wide
+/// registry, so an interrupt ([`remove_temps_and_exit`]) removes what the run had not finished.
 #[must_use = "a staged file is removed unless committed"]
 pub struct Staged {
     tmp: PathBuf,
@@ -63,6 +64,33 @@ pub struct Staged {
 
 /// Prefix of every temporary file the project writes: `.<name>.vastocean-tmp.<pid>.<n>`.
 pub const TEMP_MARKER: &str = ".vastocean-tmp.";
+
+/// Temporary files this process has open, and the lock a set commit holds while it renames
+/// (an interrupt waits for it, so a set never appears half renamed).
+static TEMPS: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+static COMMITTING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn lock<T>(m: &std::sync::Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+fn register(tmp: &Path) {
+    lock(&TEMPS).push(tmp.to_path_buf());
+}
+
+fn unregister(tmp: &Path) {
+    lock(&TEMPS).retain(|t| t != tmp);
+}
+
+/// Removes every temporary file of this process and exits with `code` (for SIGINT/SIGTERM:
+/// 130). Waits for a set commit in progress to finish first.
+pub fn remove_temps_and_exit(code: i32) -> ! {
+    let _commit = lock(&COMMITTING);
+    for t in lock(&TEMPS).drain(..) {
+        let _ = fs::remove_file(t);
+    }
+    std::process::exit(code)
+}
 
 fn temp_name(path: &Path) -> PathBuf {
     use std::sync::atomic::{AtomicU64, Ordering};
@@ -74,15 +102,43 @@ fn temp_name(path: &Path) -> PathBuf {
     path.with_file_name(name)
 }
 
+/// Removes the temporary files that earlier runs writing `path` left behind when they were
+/// killed (their process is gone); returns how many. Linux-only liveness check (/proc).
+pub fn sweep_stale_temps(path: &Path) -> usize {
+    let (Some(dir), Some(name)) = (path.parent(), path.file_name()) else {
+        return 0;
+    };
+    let dir = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    let mut prefix = std::ffi::OsString::from(".");
+    prefix.push(name);
+    prefix.push(TEMP_MARKER);
+    let prefix = prefix.to_string_lossy().into_owned();
+    let Ok(entries) = fs::read_dir(dir) else {
+        return 0;
+    };
+    let mut removed = 0;
+    for e in entries.flatten() {
+        let file = e.file_name().to_string_lossy().into_owned();
+        let Some(rest) = file.strip_prefix(&prefix) else {
+            continue;
+        };
+        let pid = rest.split('.').next().and_then(|p| p.parse::<u32>().ok());
+        let alive = pid.is_some_and(|p| Path::new(&format!("/proc/{p}")).exists());
+        if !alive && fs::remove_file(e.path()).is_ok() {
+            removed += 1;
+        }
+    }
+    removed
+}
+
 impl Staged {
     /// Renames the temporary file to its destination.
-    pub fn commit(mut self) -> Result<(), WriteError> {
-        let result = fs::rename(&self.tmp, &self.path);
-        self.committed = result.is_ok();
-        result.map_err(|source| WriteError {
-            path: self.path.clone(),
-            source,
-        })
+    pub fn commit(self) -> Result<(), WriteError> {
+        commit_all(vec![self])
     }
 
     /// Where the file goes when committed.
@@ -96,7 +152,71 @@ impl Drop for Staged {
         if !self.committed {
             let _ = fs::remove_file(&self.tmp);
         }
+        unregister(&self.tmp);
     }
+}
+
+/// Renames every staged file into place, all or none: files already under the final names are
+/// first moved aside, and if any rename fails the new files are removed and the old ones put
+/// back, so a failure leaves the previous set untouched.
+pub fn commit_all(files: Vec<Staged>) -> Result<(), WriteError> {
+    let _commit = lock(&COMMITTING);
+    let err = |path: &Path, source| WriteError {
+        path: path.to_path_buf(),
+        source,
+    };
+    // Old files moved aside: (backup, final).
+    let mut aside: Vec<(PathBuf, PathBuf)> = Vec::new();
+    let mut done: Vec<usize> = Vec::new();
+    let mut result = Ok(());
+    for f in &files {
+        if fs::symlink_metadata(&f.path).is_ok_and(|m| m.is_dir()) {
+            result = Err(err(
+                &f.path,
+                std::io::Error::new(std::io::ErrorKind::IsADirectory, "is a directory"),
+            ));
+            break;
+        }
+        if f.path.exists() {
+            let backup = temp_name(&f.path);
+            match fs::rename(&f.path, &backup) {
+                Ok(()) => aside.push((backup, f.path.clone())),
+                Err(e) => {
+                    result = Err(err(&f.path, e));
+                    break;
+                }
+            }
+        }
+    }
+    if result.is_ok() {
+        for (i, f) in files.iter().enumerate() {
+            match fs::rename(&f.tmp, &f.path) {
+                Ok(()) => done.push(i),
+                Err(e) => {
+                    result = Err(err(&f.path, e));
+                    break;
+                }
+            }
+        }
+    }
+    let mut files = files;
+    if result.is_err() {
+        for &i in &done {
+            let _ = fs::remove_file(&files[i].path);
+        }
+        for (backup, path) in &aside {
+            let _ = fs::rename(backup, path);
+        }
+    } else {
+        for (backup, _) in &aside {
+            let _ = fs::remove_file(backup);
+        }
+        for f in &mut files {
+            f.committed = true;
+        }
+    }
+    drop(files);
+    result
 }
 
 /// Writes the contents of `path` to a unique temporary file in the same folder (created if
@@ -123,6 +243,7 @@ pub fn stage(
         path: path.to_path_buf(),
         committed: false,
     };
+    register(&staged.tmp);
     let file = fs::File::create(&staged.tmp).map_err(err)?;
     let result = (|| {
         let mut w = BufWriter::new(file);
@@ -171,6 +292,15 @@ pub fn write_exr_with(
     img: &RgbImage,
     extra: &[(&str, &[f32])],
 ) -> Result<(), ImageError> {
+    Ok(stage_exr_with(path, img, extra)?.commit()?)
+}
+
+/// [`write_exr_with`], staged (see [`commit_all`]).
+pub fn stage_exr_with(
+    path: &Path,
+    img: &RgbImage,
+    extra: &[(&str, &[f32])],
+) -> Result<Staged, ImageError> {
     use exr::prelude::*;
     let n = img.width * img.height;
     let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = ["R", "G", "B"]
@@ -193,7 +323,7 @@ pub fn write_exr_with(
     );
     layer.encoding.compression = Compression::ZIP16;
     let image = Image::from_layer(layer);
-    Ok(write_atomically(path, |w| {
+    Ok(stage(path, |w| {
         image
             .write()
             .to_buffered(w)
@@ -280,16 +410,25 @@ pub fn auto_exposure(img: &RgbImage) -> f32 {
 
 /// Writes an 8-bit sRGB PNG preview of a linear image.
 pub fn write_png(path: &Path, img: &RgbImage, exposure: f32) -> Result<(), ImageError> {
+    Ok(stage_png(path, img, exposure)?.commit()?)
+}
+
+/// [`write_png`], staged (see [`commit_all`]).
+pub fn stage_png(path: &Path, img: &RgbImage, exposure: f32) -> Result<Staged, ImageError> {
     let mut bytes = Vec::with_capacity(img.width * img.height * 3);
     for &c in &img.pixels {
         bytes.extend_from_slice(&tonemap(c, exposure));
     }
-    write_png_rgb8(path, img.width as u32, img.height as u32, &bytes)
+    stage_png_rgb8(path, img.width as u32, img.height as u32, &bytes)
 }
 
 /// Writes raw 8-bit RGB rows as a PNG.
 pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<(), ImageError> {
-    Ok(write_atomically(path, |w| {
+    Ok(stage_png_rgb8(path, width, height, rgb)?.commit()?)
+}
+
+fn stage_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<Staged, ImageError> {
+    Ok(stage(path, |w| {
         let mut enc = png::Encoder::new(w, width, height);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
@@ -304,7 +443,12 @@ pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Resul
 
 /// Writes a value as pretty JSON.
 pub fn write_json(path: &Path, value: &impl serde::Serialize) -> Result<(), ImageError> {
-    Ok(write_atomically(path, |w| {
+    Ok(stage_json(path, value)?.commit()?)
+}
+
+/// [`write_json`], staged (see [`commit_all`]).
+pub fn stage_json(path: &Path, value: &impl serde::Serialize) -> Result<Staged, ImageError> {
+    Ok(stage(path, |w| {
         serde_json::to_writer_pretty(&mut *w, value).map_err(std::io::Error::other)?;
         w.write_all(b"\n")
     })?)

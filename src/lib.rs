@@ -20,6 +20,7 @@ pub mod equirect;
 pub mod fp;
 pub mod image_io;
 pub mod lod;
+pub mod memory;
 pub mod mesh;
 pub mod ocean;
 pub mod render;

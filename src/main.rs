@@ -35,6 +35,9 @@ fn exit_code(e: &anyhow::Error) -> ExitCode {
 
 fn main() -> ExitCode {
     let args = cli::Cli::parse();
+    // Ctrl-C or a polite kill removes the half-written temporary files (an output set being
+    // renamed into place is finished first), then exits as shells expect: 130.
+    let _ = ctrlc::set_handler(|| vastocean::image_io::remove_temps_and_exit(130));
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

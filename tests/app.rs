@@ -1,6 +1,7 @@
 //! The commands' jobs end to end, through the app layer: the files each writes and the keys of
 //! its JSON.
 
+use crate::common::vastocean;
 use vastocean::app;
 use vastocean::config::{LodChoice, LodConfig, Projection, SceneConfig};
 
@@ -250,19 +251,6 @@ fn bench_bvh_writes_a_row_per_backend_quality_and_size() {
     }
     assert!(dir.join("bvh.png").metadata().unwrap().len() > 1000);
     let _ = std::fs::remove_dir_all(dir);
-}
-
-/// Runs the binary; (exit code, stdout, stderr).
-fn vastocean(args: &[&str]) -> (i32, String, String) {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_vastocean"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
 }
 
 #[test]

@@ -120,3 +120,16 @@ pub fn judge(
         (a, b) => Verdict::Wrong(format!("backend {a:?} vs oracle {b:?}")),
     }
 }
+
+/// Runs the binary; (exit code, stdout, stderr).
+pub fn vastocean(args: &[&str]) -> (i32, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_vastocean"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}

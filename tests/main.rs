@@ -3,8 +3,10 @@
 mod app;
 mod bvh;
 mod common;
+mod defects;
 #[cfg(feature = "embree")]
 mod embree;
 mod lod;
 mod render;
 mod sky;
+mod stress;

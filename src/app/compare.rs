@@ -194,7 +194,8 @@ fn check(job: &CompareJob) -> Result<(), AppError> {
             "the analysed rows {top}:{bottom} must lie inside the rendered band {bt}:{bb}"
         )));
     }
-    Ok(())
+    // The output folder, before minutes of work.
+    super::check_output_dir(&job.out)
 }
 
 /// Renders every scenario, each tessellation prepared once; returned in [`Scenario::ALL`]

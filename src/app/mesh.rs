@@ -49,6 +49,9 @@ pub struct MeshReport {
 pub fn run(job: &MeshJob) -> Result<MeshReport, AppError> {
     job.lod.validate()?;
     job.camera.validate()?;
+    if let Some(path) = &job.ply {
+        super::check_outputs(std::slice::from_ref(path))?;
+    }
     let mut params = crate::lod::params_for(&job.lod, &job.camera)?;
     params.pattern = job.pattern;
     params.validate()?;

@@ -17,6 +17,7 @@ pub mod render;
 pub mod sky;
 #[cfg(feature = "embree")]
 pub mod smoke;
+pub mod stress;
 pub mod study;
 
 use std::error::Error;
@@ -102,7 +103,9 @@ impl From<crate::render::pipeline::RenderError> for AppError {
             RenderError::Ocean(e) => e.into(),
             RenderError::Lod(e) => e.into(),
             RenderError::Image(e) => e.into(),
-            RenderError::NoEmbree => AppError::Input(e.into()),
+            RenderError::NoEmbree
+            | RenderError::CameraUnderwater { .. }
+            | RenderError::Folded { .. } => AppError::Input(e.into()),
             _ => AppError::Run(e.into()),
         }
     }
@@ -126,4 +129,42 @@ pub fn with_extension(prefix: &std::path::Path, ext: &str) -> std::path::PathBuf
     let mut p = prefix.as_os_str().to_owned();
     p.push(ext);
     p.into()
+}
+
+/// Checks, before any work, that the files of an output set can be written: none is a
+/// directory, their folder exists (it is created) and takes a new file. Removes the temporary
+/// files that killed earlier runs left beside them. A problem is the user's to fix (exit 2).
+pub fn check_outputs(paths: &[std::path::PathBuf]) -> Result<(), AppError> {
+    for p in paths {
+        if p.is_dir() {
+            return Err(AppError::input(format!(
+                "{} is a directory; choose another output name",
+                p.display()
+            )));
+        }
+        let dir = match p.parent().filter(|d| !d.as_os_str().is_empty()) {
+            Some(d) => d.to_path_buf(),
+            None => std::path::PathBuf::from("."),
+        };
+        check_output_dir(&dir)?;
+        crate::image_io::sweep_stale_temps(p);
+    }
+    Ok(())
+}
+
+/// Checks that `dir` is (or can be made) a folder that takes new files.
+pub fn check_output_dir(dir: &std::path::Path) -> Result<(), AppError> {
+    let bad = |why: String| AppError::input(format!("cannot write into {}: {why}", dir.display()));
+    if dir.exists() && !dir.is_dir() {
+        return Err(bad("it is not a directory".into()));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| bad(e.to_string()))?;
+    let probe = dir.join(format!(
+        ".vastocean-probe.{}.{:?}",
+        std::process::id(),
+        std::thread::current().id()
+    ));
+    std::fs::File::create(&probe).map_err(|e| bad(e.to_string()))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
 }

@@ -45,6 +45,9 @@ impl OceanReport {
 
 pub fn run(job: &OceanJob) -> Result<OceanReport, AppError> {
     job.params.validate()?;
+    if let Some((path, _)) = &job.png {
+        super::check_outputs(std::slice::from_ref(path))?;
+    }
     let surface = Surface::new(&job.params, job.seed)?;
     let summary = surface.summary();
     if let Some((path, extent)) = &job.png {

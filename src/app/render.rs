@@ -6,9 +6,9 @@
 use std::fmt;
 use std::path::PathBuf;
 
-use super::{AppError, with_extension};
+use super::{AppError, check_outputs, with_extension};
 use crate::config::SceneConfig;
-use crate::image_io::{auto_exposure, write_exr_with, write_json, write_png};
+use crate::image_io::{auto_exposure, commit_all, stage_exr_with, stage_json, stage_png};
 use crate::render::pipeline::{RenderReport, render_scene};
 
 /// A render job.
@@ -22,21 +22,25 @@ pub struct RenderJob {
 }
 
 /// Renders the scene and writes its three files; returns the sidecar.
+/// The three files appear together or not at all: all are staged, then renamed in one commit
+/// (an existing set is replaced whole, or left untouched when anything fails).
 pub fn run(job: &RenderJob) -> Result<RenderReport, AppError> {
     job.scene.validate()?;
-    let mut r = render_scene(&job.scene, job.progress)?;
     let (exr, png, json) = (
         with_extension(&job.out, ".exr"),
         with_extension(&job.out, ".png"),
         with_extension(&job.out, ".json"),
     );
+    check_outputs(&[exr.clone(), png.clone(), json.clone()])?;
+    let mut r = render_scene(&job.scene, job.progress)?;
     let image = &r.film.image;
-    write_exr_with(&exr, image, &[("Y.variance", &r.film.var_y)])?;
-    write_png(&png, image, auto_exposure(image))?;
+    let staged_exr = stage_exr_with(&exr, image, &[("Y.variance", &r.film.var_y)])?;
+    let staged_png = stage_png(&png, image, auto_exposure(image))?;
     r.report.exr = exr;
     r.report.png = png;
     r.report.json = json.clone();
-    write_json(&json, &r.report)?;
+    let staged_json = stage_json(&json, &r.report)?;
+    commit_all(vec![staged_exr, staged_png, staged_json])?;
     Ok(r.report)
 }
 
@@ -75,9 +79,12 @@ impl fmt::Display for RenderReport {
         }
         writeln!(
             f,
-            "  NaN samples {}, wrong-side directions {}, truncated paths {}",
-            self.nan_count, self.wrong_side_count, self.truncated_paths
+            "  NaN samples {}, wrong-side directions {}, truncated paths {}, camera rays escaping below the horizon {}",
+            self.nan_count, self.wrong_side_count, self.truncated_paths, self.escaped_below_horizon
         )?;
+        for w in &self.warnings {
+            writeln!(f, "  warning: {w}")?;
+        }
         write!(
             f,
             "  wrote {} {} {}",

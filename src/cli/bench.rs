@@ -26,7 +26,7 @@ pub enum BenchCommand {
         #[arg(long)]
         quick: bool,
         /// Worker threads (0 = all cores).
-        #[arg(long, default_value_t = 0)]
+        #[arg(long, default_value_t = 0, value_parser = super::threads_arg)]
         threads: usize,
         #[arg(long)]
         json: bool,
@@ -42,7 +42,7 @@ pub enum BenchCommand {
         #[arg(long)]
         quick: bool,
         /// Worker threads (0 = all cores).
-        #[arg(long, default_value_t = 0)]
+        #[arg(long, default_value_t = 0, value_parser = super::threads_arg)]
         threads: usize,
         #[arg(long)]
         json: bool,

@@ -25,7 +25,7 @@ pub struct CrosscheckArgs {
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Worker threads (0 = all cores).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = super::threads_arg)]
     threads: usize,
     #[arg(long)]
     pub json: bool,
@@ -62,7 +62,7 @@ pub struct SmokeArgs {
     #[arg(long, value_parser = choice::<vastocean::accel::embree::Quality>(), default_value = "medium")]
     quality: vastocean::accel::embree::Quality,
     /// Threads for Embree and the tracer (0 = all cores).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = super::threads_arg)]
     threads: usize,
     #[arg(long)]
     pub json: bool,

@@ -8,6 +8,7 @@ mod mesh;
 mod ocean;
 mod scene;
 mod sky;
+mod stress;
 mod study;
 
 use anyhow::Result;
@@ -47,7 +48,7 @@ enum Command {
     /// Print what this build has: versions, Embree's ISA and thread count.
     Info {
         /// Threads Embree may use (0 = all cores).
-        #[arg(long, default_value_t = 0)]
+        #[arg(long, default_value_t = 0, value_parser = crate::cli::threads_arg)]
         threads: usize,
         #[arg(long)]
         json: bool,
@@ -77,6 +78,10 @@ enum Command {
     /// (GNU parallel, a Slurm job array), summarize (its Figure 10 and counts).
     #[command(subcommand)]
     Study(study::StudyCommand),
+    /// Numerical-stability stress matrix: extreme cameras, positions, seas, suns and backends,
+    /// with invariants checked on every cell (NaN, holes, self-intersection, white furnace,
+    /// periodicity, backend agreement); exit 1 if any fails.
+    Stress(stress::StressArgs),
     /// Embree smoke run: build a BVH over a wavy grid and trace random rays down onto it.
     #[cfg(feature = "embree")]
     Smoke(embree::SmokeArgs),
@@ -98,7 +103,17 @@ pub fn run(cli: Cli) -> Result<()> {
         }
         Command::Sky(c) => sky::run(c),
         Command::Study(c) => study::run(c),
+        Command::Stress(a) => stress::stress(a),
         #[cfg(feature = "embree")]
         Command::Smoke(a) => emit(&app::smoke::run(&a.job())?, a.json),
     }
+}
+
+/// Parses `--threads` and bounds it (see [`vastocean::config::max_threads`]).
+pub fn threads_arg(s: &str) -> Result<usize, String> {
+    let n: usize = s
+        .parse()
+        .map_err(|_| format!("`{s}` is not a thread count"))?;
+    vastocean::config::check_threads("--threads", n).map_err(|e| e.to_string())?;
+    Ok(n)
 }

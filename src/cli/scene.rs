@@ -43,7 +43,7 @@ pub struct SceneFlags {
     #[arg(long)]
     camera_height: Option<f64>,
     /// Worker threads (0 = all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = super::threads_arg)]
     threads: Option<usize>,
     /// The BVH: Debian's Embree or the pure-Rust one.
     #[arg(long, value_parser = choice::<vastocean::config::Backend>())]

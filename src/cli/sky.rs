@@ -16,7 +16,7 @@ pub enum SkyCommand {
     Generate {
         #[arg(long, value_parser = choice::<vastocean::sky::procedural::SkyKind>())]
         kind: vastocean::sky::procedural::SkyKind,
-        /// Sun elevation above the horizon, degrees (0..=90; sets the overcast sky's brightness).
+        /// Sun elevation above the horizon, degrees (-10..=90; sets the overcast sky's brightness).
         #[arg(long)]
         sun_elevation: f64,
         /// Sun azimuth, degrees (0 = +x, 90 = +z).

@@ -75,7 +75,7 @@ pub enum StudyCommand {
         #[arg(long)]
         force: bool,
         /// Worker threads per case (0 = all cores; with GNU parallel -j 2 on 2 cores, 1).
-        #[arg(long)]
+        #[arg(long, value_parser = super::threads_arg)]
         threads: Option<usize>,
         #[arg(long)]
         json: bool,

@@ -11,11 +11,19 @@ pub enum Projection {
     /// `bottom` degrees (e.g. (1, -6)) at the full-sphere pixel pitch.
     Equirect { band_deg: Option<(f64, f64)> },
     /// Pinhole with horizontal field of view, looking at azimuth `yaw_deg`, elevation `pitch_deg`.
+    /// Absent keys: 60 degrees wide, looking along azimuth 0, level.
     Pinhole {
+        #[serde(default = "pinhole_hfov_deg")]
         hfov_deg: f64,
+        #[serde(default)]
         yaw_deg: f64,
+        #[serde(default)]
         pitch_deg: f64,
     },
+}
+
+fn pinhole_hfov_deg() -> f64 {
+    60.0
 }
 
 /// The camera section of a scene.
@@ -42,5 +50,126 @@ impl Default for CameraConfig {
             aspect: 16.0 / 9.0,
             projection: Projection::Equirect { band_deg: None },
         }
+    }
+}
+
+impl CameraConfig {
+    /// The azimuths (degrees) under which a pinhole camera sees the sea: `(centre, half_width)`
+    /// of the directions of its image that point below the horizontal. `None` when it sees the
+    /// sea all round (the equirectangular camera; a pinhole whose image holds the nadir).
+    ///
+    /// The image plane maps linearly to directions (before normalisation), so the part of the
+    /// image that looks down is the image rectangle clipped by a line, a convex polygon, and the
+    /// horizontal components of its directions are another; unless that holds the origin (the
+    /// nadir), its azimuths span less than a half turn and their extremes are at its corners.
+    /// A horizontal field of view alone misses the corners of an image that looks down: their
+    /// azimuths reach much further sideways.
+    pub fn sea_azimuths_deg(&self) -> Option<(f64, f64)> {
+        let Projection::Pinhole {
+            hfov_deg,
+            yaw_deg,
+            pitch_deg,
+        } = self.projection
+        else {
+            return None;
+        };
+        let (yaw, pitch) = (yaw_deg.to_radians(), pitch_deg.to_radians());
+        let fwd = crate::equirect::direction64(pitch, yaw);
+        let right = glam::DVec3::new(-yaw.sin(), 0.0, yaw.cos());
+        let up = right.cross(fwd);
+        let tx = (0.5 * hfov_deg.to_radians()).tan();
+        // The image's height over width, a pixel rounding's worth taller.
+        let ty = tx * (1.0 / self.aspect + 1.0 / self.width as f64);
+        let dir = |(sx, sy): (f64, f64)| fwd + sx * right + sy * up;
+        // The image rectangle clipped to directions with y <= 0 (Sutherland-Hodgman, one edge).
+        let rect = [(-tx, -ty), (tx, -ty), (tx, ty), (-tx, ty)];
+        let mut poly: Vec<(f64, f64)> = Vec::new();
+        for i in 0..4 {
+            let (a, b) = (rect[i], rect[(i + 1) % 4]);
+            let (ya, yb) = (dir(a).y, dir(b).y);
+            if ya <= 0.0 {
+                poly.push(a);
+            }
+            if (ya <= 0.0) != (yb <= 0.0) {
+                let t = ya / (ya - yb);
+                poly.push((a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1)));
+            }
+        }
+        if poly.is_empty() {
+            // Looking up: no sea in view but whatever rises above the camera's height nearby.
+            return Some((yaw_deg, 0.0));
+        }
+        // The nadir's place in the image plane: horizontal components both zero.
+        let (a, b, c) = (fwd, right, up);
+        // (A level camera's image plane is vertical: its nadir lies at infinity, det = 0.)
+        let det = b.x * c.z - c.x * b.z;
+        if det.abs() > 1e-12 {
+            let sx0 = (-a.x * c.z + c.x * a.z) / det;
+            let sy0 = (-b.x * a.z + a.x * b.z) / det;
+            let inside = (0..poly.len()).all(|i| {
+                let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
+                (q.0 - p.0) * (sy0 - p.1) - (q.1 - p.1) * (sx0 - p.0) >= -1e-12
+            });
+            if inside && dir((sx0, sy0)).y < 0.0 {
+                return None;
+            }
+        }
+        let rel: Vec<f64> = poly
+            .iter()
+            .map(|&p| {
+                let d = dir(p);
+                let az = d.z.atan2(d.x) - yaw;
+                (az + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
+            })
+            .collect();
+        let lo = rel.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = rel.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        if hi - lo > 170f64.to_radians() {
+            return None;
+        }
+        Some((
+            yaw_deg + (0.5 * (hi + lo)).to_degrees(),
+            (0.5 * (hi - lo)).to_degrees(),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pinhole(hfov_deg: f64, yaw_deg: f64, pitch_deg: f64) -> CameraConfig {
+        CameraConfig {
+            projection: Projection::Pinhole {
+                hfov_deg,
+                yaw_deg,
+                pitch_deg,
+            },
+            ..CameraConfig::default()
+        }
+    }
+
+    #[test]
+    fn a_level_camera_sees_the_sea_over_its_horizontal_field_of_view() {
+        let (c, h) = pinhole(60.0, 30.0, 0.0).sea_azimuths_deg().unwrap();
+        assert!(
+            (c - 30.0).abs() < 1e-9 && (h - 30.0).abs() < 1e-6,
+            "{c} {h}"
+        );
+    }
+
+    #[test]
+    fn a_camera_looking_down_sees_further_sideways_at_its_corners() {
+        // The case: 90 degrees wide, pitched 35 degrees down; a bottom corner looks
+        // 63.6 degrees off the yaw, not 45.
+        let (c, h) = pinhole(90.0, 45.0, -35.0).sea_azimuths_deg().unwrap();
+        assert!((c - 45.0).abs() < 1e-9, "{c}");
+        let corner = (1.0f64).atan2(35f64.to_radians().cos() - 0.5625 * 35f64.to_radians().sin());
+        assert!((h - corner.to_degrees()).abs() < 0.2, "{h}");
+        // Straight down, or steep enough that the nadir is in the image: all round.
+        assert_eq!(pinhole(60.0, 0.0, -90.0).sea_azimuths_deg(), None);
+        assert_eq!(pinhole(60.0, 0.0, -75.0).sea_azimuths_deg(), None);
+        assert!(pinhole(60.0, 0.0, -60.0).sea_azimuths_deg().is_some());
+        assert_eq!(CameraConfig::default().sea_azimuths_deg(), None);
     }
 }

@@ -50,6 +50,42 @@ pub(crate) fn invalid(field: &str, requirement: &str, got: impl std::fmt::Displa
     }
 }
 
+/// The largest radiance any input may hold (sky maps times their scale, analytic skies),
+/// W m^-2 sr^-1 (or whatever unit the sky is in): a sample's square, which the per-pixel variance
+/// takes and stores as f32 (at most 3.4e38), then stays finite, and so do all sums over samples
+/// (f64). A real sun is about 2e7.
+pub const MAX_RADIANCE: f64 = 1e18;
+
+/// Checks a radiance-like input: finite, >= 0 and at most [`MAX_RADIANCE`].
+pub fn check_radiance(field: &str, v: f64) -> Result<(), ConfigError> {
+    if v.is_finite() && (0.0..=MAX_RADIANCE).contains(&v) {
+        Ok(())
+    } else {
+        Err(invalid(field, "finite, >= 0 and <= 1e18", v))
+    }
+}
+
+/// Most worker threads a job may ask for: 4 per core (more only adds scheduling and memory; at
+/// thousands the thread start-up alone takes minutes), and at most 1024.
+pub fn max_threads() -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    (4 * cores).min(1024)
+}
+
+/// Checks a thread count (0 = all cores) against [`max_threads`].
+pub fn check_threads(field: &str, n: usize) -> Result<(), ConfigError> {
+    let max = max_threads();
+    if n <= max {
+        Ok(())
+    } else {
+        Err(invalid(
+            field,
+            &format!("at most {max} (4 per core of this machine, at most 1024; 0 = all cores)"),
+            n,
+        ))
+    }
+}
+
 pub(crate) fn positive(field: &str, v: f64) -> Result<(), ConfigError> {
     // NaN is not finite.
     if v > 0.0 && v.is_finite() {
@@ -163,6 +199,7 @@ impl SceneConfig {
             }
         }
         let r = &self.render;
+        check_threads("render.threads", r.threads)?;
         if !(1..=1_000_000).contains(&r.spp) {
             return Err(invalid("render.spp", "in 1..=1000000", r.spp));
         }
@@ -249,6 +286,40 @@ impl SkyConfig {
             && !(c >= 1.0 && c.is_finite())
         {
             return Err(invalid("sky.clip_relative", "finite and >= 1", c));
+        }
+        let scale = self.scale as f64;
+        let rgb = |field: &str, v: [f32; 3]| {
+            v.iter()
+                .try_for_each(|&c| check_radiance(field, c as f64 * scale.max(1.0)))
+        };
+        match self.analytic {
+            AnalyticSky::Uniform { radiance } => rgb("sky.analytic.radiance", radiance)?,
+            AnalyticSky::Gradient { zenith, horizon } => {
+                rgb("sky.analytic.zenith", zenith)?;
+                rgb("sky.analytic.horizon", horizon)?;
+            }
+            AnalyticSky::Clear {
+                sun_elevation_deg,
+                sun_azimuth_deg,
+                sun_radiance,
+                sky_scale,
+            } => {
+                crate::sky::check_sun_elevation(sun_elevation_deg as f64).map_err(|m| {
+                    invalid("sky.analytic.sun_elevation_deg", &m, sun_elevation_deg)
+                })?;
+                if !sun_azimuth_deg.is_finite() {
+                    return Err(invalid(
+                        "sky.analytic.sun_azimuth_deg",
+                        "finite",
+                        sun_azimuth_deg,
+                    ));
+                }
+                check_radiance(
+                    "sky.analytic.sun_radiance",
+                    sun_radiance as f64 * scale.max(1.0),
+                )?;
+                check_radiance("sky.analytic.sky_scale", sky_scale as f64 * scale.max(1.0))?;
+            }
         }
         Ok(())
     }

@@ -16,21 +16,41 @@ pub enum AnalyticSky {
     /// A clear sky: blue zenith brightening towards a hazy horizon, a glow around the sun and a
     /// 0.53 degree sun disc. A simple empirical model, not a spectral one (see the skies issue).
     Clear {
+        #[serde(default = "clear::sun_elevation_deg")]
         sun_elevation_deg: f32,
+        #[serde(default = "clear::sun_azimuth_deg")]
         sun_azimuth_deg: f32,
+        #[serde(default = "clear::sun_radiance")]
         sun_radiance: f32,
+        #[serde(default = "clear::sky_scale")]
         sky_scale: f32,
     },
+}
+
+/// The clear sky's defaults, key by key (every key of a scene file is optional).
+mod clear {
+    pub fn sun_elevation_deg() -> f32 {
+        4.0
+    }
+    pub fn sun_azimuth_deg() -> f32 {
+        180.0
+    }
+    pub fn sun_radiance() -> f32 {
+        2000.0
+    }
+    pub fn sky_scale() -> f32 {
+        1.0
+    }
 }
 
 impl Default for AnalyticSky {
     /// A low sun, where the paper found normal mapping matters most.
     fn default() -> Self {
         AnalyticSky::Clear {
-            sun_elevation_deg: 4.0,
-            sun_azimuth_deg: 180.0,
-            sun_radiance: 2000.0,
-            sky_scale: 1.0,
+            sun_elevation_deg: clear::sun_elevation_deg(),
+            sun_azimuth_deg: clear::sun_azimuth_deg(),
+            sun_radiance: clear::sun_radiance(),
+            sky_scale: clear::sky_scale(),
         }
     }
 }

@@ -283,13 +283,16 @@ pub fn params_for(lod: &LodConfig, camera: &CameraConfig) -> Result<LodParams, L
     if let Some(r) = lod.reading {
         p.reading = r;
     }
-    if let Projection::Pinhole {
-        hfov_deg, yaw_deg, ..
-    } = camera.projection
-    {
-        // The frustum pattern culls on the horizontal field of view; a wide image's diagonal
-        // reaches further sideways than hfov, which the pattern's own margin covers.
-        p.pattern = Pattern::Frustum { yaw_deg, hfov_deg };
+    // A pinhole keeps the cells under the azimuths where its image sees the sea (a camera
+    // looking down sees much further sideways at its corners than its horizontal field of view).
+    if matches!(camera.projection, Projection::Pinhole { .. }) {
+        p.pattern = match camera.sea_azimuths_deg() {
+            Some((yaw_deg, half)) => Pattern::Frustum {
+                yaw_deg,
+                hfov_deg: (2.0 * half).max(1.0),
+            },
+            None => Pattern::Square,
+        };
     }
     p.validate()?;
     Ok(p)

@@ -67,6 +67,15 @@ impl Film {
     }
 }
 
+/// Bytes a film of `pixels` pixels takes while it renders and is written: the per-pixel sums,
+/// the image, its variance, `batches` batch means, and the copies the EXR and PNG writers make.
+pub fn film_bytes(pixels: u64, batches: usize) -> u64 {
+    let per_pixel = std::mem::size_of::<PixelSums>() // sums while rendering
+        + 12 + 4 + 4 * batches // image, variance, batch means
+        + 16 + 3; // EXR channels (R, G, B, Y.variance), PNG bytes
+    pixels * per_pixel as u64
+}
+
 /// What one pixel accumulates.
 #[derive(Clone, Copy, Default)]
 struct PixelSums {

@@ -40,6 +40,9 @@ pub struct TraceSettings {
     /// Radiance a downward ray that never meets the surface again returns: the water's R_rs
     /// times the sky's irradiance (see [`Water::upwelling`]), resolved once per render.
     pub upwelling: [f32; 3],
+    /// A camera ray with a direction's y below this must meet the sea (it dips under the
+    /// horizon of the deepest troughs); one that escapes counts as a hole. -1 = never counted.
+    pub must_hit_below_y: f32,
 }
 
 impl Default for TraceSettings {
@@ -59,6 +62,7 @@ impl TraceSettings {
             water: scene.water,
             wrong_side: scene.render.wrong_side,
             upwelling: scene.water.upwelling(sky_irradiance).to_array(),
+            must_hit_below_y: -1.0,
         }
     }
 }
@@ -72,6 +76,10 @@ pub struct Counters {
     pub hits: u64,
     /// Samples whose radiance was NaN or infinite (dropped by the guard).
     pub nan: u64,
+    /// Camera rays below the horizon that met no water (see [`TraceSettings::must_hit_below_y`]).
+    pub escaped_below_horizon: u64,
+    /// Rays spawned at a hit that met their own triangle again (self-intersection). Should be 0.
+    pub self_hits: u64,
     /// Reflected or refracted rays the shading normal sent to the wrong side of the triangle.
     pub wrong_side: u64,
     /// Hits where the shading normal faced away from the incoming ray.
@@ -95,6 +103,8 @@ impl std::ops::AddAssign for Counters {
         self.rays += o.rays;
         self.hits += o.hits;
         self.nan += o.nan;
+        self.escaped_below_horizon += o.escaped_below_horizon;
+        self.self_hits += o.self_hits;
         self.wrong_side += o.wrong_side;
         self.backfacing_shading += o.backfacing_shading;
         self.bent += o.bent;
@@ -185,6 +195,8 @@ struct SurfacePoint {
     ng: Vec3,
     /// Bound on the rounding error of `p`, per component.
     err: Vec3,
+    /// The triangle hit: rays spawned here must never meet it again.
+    prim: u32,
 }
 
 fn surface_point(mesh: &Mesh, hit: &Hit) -> SurfacePoint {
@@ -211,7 +223,12 @@ fn surface_point(mesh: &Mesh, hit: &Hit) -> SurfacePoint {
     if ng == Vec3::ZERO {
         ng = nv.normalize_or(Vec3::Y);
     }
-    SurfacePoint { p, ng, err }
+    SurfacePoint {
+        p,
+        ng,
+        err,
+        prim: hit.prim,
+    }
 }
 
 impl SurfacePoint {
@@ -339,6 +356,21 @@ impl SceneRef<'_> {
         rng: &mut Rng,
         c: &mut Counters,
     ) -> Vec3 {
+        self.radiance_from(ray, None, in_water, segment, settings, rng, c)
+    }
+
+    /// [`Self::radiance`] for a ray spawned on triangle `parent` (counted if it meets it again).
+    #[allow(clippy::too_many_arguments)]
+    fn radiance_from(
+        &self,
+        ray: &Ray,
+        parent: Option<u32>,
+        in_water: bool,
+        segment: u32,
+        settings: &TraceSettings,
+        rng: &mut Rng,
+        c: &mut Counters,
+    ) -> Vec3 {
         if segment >= settings.max_segments {
             c.truncated += 1;
             return Vec3::ZERO;
@@ -354,6 +386,9 @@ impl SceneRef<'_> {
         }
         c.rays += 1;
         let Some(hit) = self.accel.intersect(ray) else {
+            if segment == 0 && !in_water && d.y < settings.must_hit_below_y {
+                c.escaped_below_horizon += 1;
+            }
             return if in_water {
                 Vec3::from(settings.upwelling)
             } else {
@@ -361,6 +396,8 @@ impl SceneRef<'_> {
             };
         };
         c.hits += 1;
+        // A planar triangle cannot meet a ray leaving it twice: this is rounding error.
+        c.self_hits += u64::from(parent == Some(hit.prim));
         let s = self.scatter(d, &hit, settings, c);
         s.attenuation * self.follow(&s, segment, settings, rng, c)
     }
@@ -437,7 +474,16 @@ impl SceneRef<'_> {
         // The reflected ray stays in the medium it came from; the refracted one changes it.
         let (r_water, t_water) = (s.from_below, !s.from_below);
         let mut trace = |w: Vec3, in_water: bool, rng: &mut Rng| {
-            self.radiance(&s.sp.spawn(w), in_water, segment + 1, settings, rng, c)
+            let ray = s.sp.spawn(w);
+            self.radiance_from(
+                &ray,
+                Some(s.sp.prim),
+                in_water,
+                segment + 1,
+                settings,
+                rng,
+                c,
+            )
         };
         let mut branch = |w: Option<Vec3>, in_water: bool, rng: &mut Rng| {
             w.map_or(Vec3::ZERO, |w| trace(w, in_water, rng))

@@ -42,11 +42,77 @@ pub enum RenderError {
     Image(#[from] ImageError),
     #[error("cannot start the worker threads")]
     Threads(#[from] rayon::ThreadPoolBuildError),
+    #[error(
+        "the camera (camera.height_m = {camera_m} m) is not above the sea: the surface under it stands at {surface_m:.3} m (waves with their horizontal displacement); raise the camera or calm the sea"
+    )]
+    CameraUnderwater { camera_m: f64, surface_m: f64 },
+    #[error(
+        "{:.1}% of the sea surface folds over itself (Jacobian <= 0; ocean.choppiness = {choppiness}): above {:.0}% it is a tangle of overlapping triangles, not a sea; lower ocean.choppiness",
+        100.0 * folded, 100.0 * MAX_FOLDED_FRACTION
+    )]
+    Folded { folded: f64, choppiness: f64 },
+    #[error(
+        "this render needs about {} ({} for the {pixels}-pixel film, {} for {triangles} triangles and their BVH), more than the {} this process can still allocate; lower the width or the tessellation",
+        crate::memory::gigabytes(*need), crate::memory::gigabytes(*film), crate::memory::gigabytes(*mesh), crate::memory::gigabytes(*available)
+    )]
+    OutOfMemory {
+        need: u64,
+        film: u64,
+        mesh: u64,
+        pixels: u64,
+        triangles: u64,
+        available: u64,
+    },
     #[error("the {backend} backend reported an error while tracing: {message}")]
     Trace {
         backend: &'static str,
         message: String,
     },
+}
+
+/// Largest share of the sea surface that may fold over itself (Jacobian <= 0); more is refused.
+/// Any fold warns.
+pub const MAX_FOLDED_FRACTION: f64 = 0.10;
+
+/// Bytes a triangle of the tessellation takes with its share of the vertices and the BVH
+/// (paper-high's 22.3 M triangles peak at 2.7 GB in a whole render: 120 bytes each).
+pub const BYTES_PER_TRIANGLE: u64 = 120;
+
+/// Refuses a render that cannot fit in memory, before anything is allocated.
+fn check_memory(cfg: &SceneConfig, triangles: usize, batches: usize) -> Result<(), RenderError> {
+    let camera = Camera::new(cfg.camera.projection, cfg.camera.width, cfg.camera.aspect);
+    let pixels = (camera.width * camera.height) as u64;
+    let film = super::film::film_bytes(pixels, batches);
+    let mesh = triangles as u64 * BYTES_PER_TRIANGLE;
+    let need = film + mesh;
+    match crate::memory::available_bytes() {
+        Some(available) if need > available => Err(RenderError::OutOfMemory {
+            need,
+            film,
+            mesh,
+            pixels,
+            triangles: triangles as u64,
+            available,
+        }),
+        _ => Ok(()),
+    }
+}
+
+/// The height of the sea surface right under the camera, m: the point whose displaced position
+/// lies at the camera's nadir (found by fixed-point iteration on the horizontal displacement,
+/// which converges where the surface does not fold).
+pub fn surface_height_at_nadir(sampler: &crate::ocean::Sampler) -> f64 {
+    let (mut u, mut v) = (0.0f32, 0.0f32);
+    for _ in 0..16 {
+        let s = sampler.sample(u, v);
+        let (nu, nv) = (-s.disp[0], -s.disp[1]);
+        let moved = (nu - u).abs().max((nv - v).abs());
+        (u, v) = (nu, nv);
+        if moved < 1e-4 {
+            break;
+        }
+    }
+    sampler.sample(u, v).height as f64
 }
 
 /// The JSON sidecar of a render (also printed by `vastocean render --json`).
@@ -84,6 +150,15 @@ pub struct RenderReport {
     /// `noise_rms` over the image's mean luminance.
     pub noise_rms_relative: Option<f64>,
     pub nan_count: u64,
+    /// Share of the sea surface that folds over itself (Jacobian <= 0).
+    pub folded_fraction: f64,
+    /// Camera rays pointing below the horizon (of the sea's troughs) that met no water: holes
+    /// in the tessellation. Should be 0.
+    pub escaped_below_horizon: u64,
+    /// Rays spawned at a hit that met their own triangle again. Should be 0.
+    pub self_hits: u64,
+    /// Things worth knowing about the render (folding, holes), also printed.
+    pub warnings: Vec<String>,
     /// Rays the backend refused for a NaN or infinite origin or direction (answered as misses).
     pub rejected_rays: u64,
     pub wrong_side_count: u64,
@@ -152,6 +227,11 @@ pub struct Prepared {
 pub fn prepare(cfg: &SceneConfig) -> Result<Prepared, RenderError> {
     cfg.validate()?;
     let lod = crate::lod::params_for(&cfg.lod, &cfg.camera)?;
+    check_memory(
+        cfg,
+        crate::lod::try_count(&lod)?.0,
+        super::film::MAX_BATCHES,
+    )?;
     let pool = tracing_pool(cfg.render.threads)?;
     let threads = pool.current_num_threads();
     let sky = make_sky(cfg)?;
@@ -160,6 +240,20 @@ pub fn prepare(cfg: &SceneConfig) -> Result<Prepared, RenderError> {
             let t = Instant::now();
             let ocean = Surface::new(&cfg.ocean, cfg.render.ocean_seed)?;
             let seconds_ocean = t.elapsed().as_secs_f64();
+            let folded = ocean.summary().folded_fraction;
+            if folded > MAX_FOLDED_FRACTION {
+                return Err(RenderError::Folded {
+                    folded,
+                    choppiness: cfg.ocean.choppiness,
+                });
+            }
+            let surface_m = surface_height_at_nadir(&ocean.sampler(cfg.camera.position_m));
+            if cfg.camera.height_m <= surface_m {
+                return Err(RenderError::CameraUnderwater {
+                    camera_m: cfg.camera.height_m,
+                    surface_m,
+                });
+            }
             let t = Instant::now();
             let (mesh, stats) = tessellate(&lod, &ocean.sampler(cfg.camera.position_m))?;
             Ok((ocean, seconds_ocean, mesh, stats, t.elapsed().as_secs_f64()))
@@ -202,7 +296,32 @@ pub fn prepare(cfg: &SceneConfig) -> Result<Prepared, RenderError> {
     })
 }
 
+/// Deepest trough counted on, in RMS heights: a Gaussian sea goes below -5 sigma at about one
+/// point in 3.5 million.
+const TROUGH_SIGMAS: f64 = 5.0;
+
 impl Prepared {
+    /// The y below which a camera ray's direction must meet the sea: the dip of the horizon of
+    /// a sphere through the deepest troughs, as seen from `camera_height_m`. Flat triangles
+    /// sag below the curved sea, by up to s^2 / 4R mid-hypotenuse for legs s (34 m for the
+    /// 29 km triangles at a 10 km camera's horizon), so the sphere sits that much lower again. (A tessellation that stops short of
+    /// that horizon leaves holes, and they are counted.)
+    fn must_hit_below_y(&self, camera_height_m: f64) -> f32 {
+        let r = self.lod.earth_radius_m;
+        let horizon_m = (2.0 * r * camera_height_m).sqrt();
+        let sag = self
+            .stats
+            .per_ring
+            .iter()
+            .filter(|ring| ring.inner_m <= 2.0 * horizon_m)
+            .map(|ring| ring.size_m * ring.size_m / (4.0 * r))
+            .fold(0.0, f64::max);
+        let trough = TROUGH_SIGMAS * self.ocean.summary().realization_rms_m + sag;
+        // cos(dip) = (R - trough) / (R + h); the direction's y is -sin(dip).
+        let c = ((r - trough) / (r + camera_height_m)).min(1.0);
+        -((1.0 - c * c).sqrt()) as f32
+    }
+
     /// Traces the camera, samples and normal mode of `cfg` through the prepared scene. The
     /// ocean, LOD and sky sections of `cfg` are those `prepare` used; only `camera` (besides its
     /// position and height) and `render` may differ.
@@ -228,6 +347,9 @@ impl Prepared {
             earth_radius_m: self.lod.earth_radius_m,
             sky: &self.sky,
         };
+        check_memory(cfg, 0, batches)?;
+        let mut settings = TraceSettings::new(cfg, self.sky_irradiance);
+        settings.must_hit_below_y = self.must_hit_below_y(cfg.camera.height_m);
         let t = Instant::now();
         let (film, c) = self.pool.install(|| {
             render_image(
@@ -236,7 +358,7 @@ impl Prepared {
                 cfg.camera.height_m as f32,
                 cfg.render.spp,
                 cfg.render.seed,
-                &TraceSettings::new(cfg, self.sky_irradiance),
+                &settings,
                 batches,
                 progress,
             )
@@ -249,6 +371,20 @@ impl Prepared {
             });
         }
         let seconds_normal_map = c.normal_map_thread_seconds() / self.threads as f64;
+        let folded_fraction = self.ocean.summary().folded_fraction;
+        let mut warnings = Vec::new();
+        if folded_fraction > 0.0 {
+            warnings.push(format!(
+                "{:.3}% of the sea surface folds over itself (Jacobian <= 0); lower ocean.choppiness to avoid it",
+                100.0 * folded_fraction
+            ));
+        }
+        if c.escaped_below_horizon > 0 {
+            warnings.push(format!(
+                "{} camera rays below the horizon met no water (holes in the tessellation)",
+                c.escaped_below_horizon
+            ));
+        }
         let mesh = self.accel.mesh();
         let seconds_build = self.seconds_build;
         let report = RenderReport {
@@ -279,6 +415,10 @@ impl Prepared {
             noise_rms: film.noise_rms(),
             noise_rms_relative: film.noise_rms().map(|n| n / mean_luminance(&film.image)),
             nan_count: c.nan,
+            folded_fraction,
+            escaped_below_horizon: c.escaped_below_horizon,
+            self_hits: c.self_hits,
+            warnings,
             rejected_rays: self.accel.rejected_rays(),
             wrong_side_count: c.wrong_side,
             backfacing_shading_count: c.backfacing_shading,

@@ -18,6 +18,23 @@ use crate::image_io::{ImageError, RgbImage, read_exr};
 
 /// Angular radius of the analytic sky's sun, radians (0.53 degree diameter).
 pub const SUN_RADIUS_RAD: f32 = 0.004_625;
+
+/// The sun elevations every sky accepts, degrees: the analytic sky of a scene and the generated
+/// ones alike. 90 is the zenith; down to -10 covers civil twilight (the disc below the horizon,
+/// the sky still lit); lower is night, which none of the models describes.
+pub const SUN_ELEVATION_RANGE_DEG: (f64, f64) = (-10.0, 90.0);
+
+/// Checks a sun elevation against [`SUN_ELEVATION_RANGE_DEG`]; the error says the rule.
+pub fn check_sun_elevation(deg: f64) -> Result<(), String> {
+    let (lo, hi) = SUN_ELEVATION_RANGE_DEG;
+    if (lo..=hi).contains(&deg) {
+        Ok(())
+    } else {
+        Err(format!(
+            "in [{lo}, {hi}] degrees (90 is the zenith; below {lo} is night, which no sky model here describes)"
+        ))
+    }
+}
 /// The analytic sun's colour, scaled by its radiance.
 const SUN_COLOUR: Vec3 = Vec3::new(1.0, 0.93, 0.82);
 

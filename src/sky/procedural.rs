@@ -81,13 +81,10 @@ pub enum SkyGenError {
 impl SkyParams {
     pub fn validate(&self) -> Result<(), SkyGenError> {
         let bad = |field, message: String| Err(SkyGenError::Invalid { field, message });
-        if !(0.0..=90.0).contains(&self.sun_elevation_deg) {
+        if let Err(rule) = super::check_sun_elevation(self.sun_elevation_deg) {
             return bad(
                 "sun elevation",
-                format!(
-                    "{} degrees is outside 0..=90 (the models describe daylight with the sun up)",
-                    self.sun_elevation_deg
-                ),
+                format!("{} degrees; it must be {rule}", self.sun_elevation_deg),
             );
         }
         if !self.sun_azimuth_deg.is_finite() {
@@ -225,8 +222,13 @@ impl Preetham {
 /// transmittance with Kasten's relative air mass; ozone and water vapour bands left out) at
 /// three wavelengths standing for sRGB's R, G and B, scaled so that the unattenuated sun has the
 /// extraterrestrial luminance.
+/// A sun below the horizon (Kasten's air mass has no value past 93.9 degrees from the zenith)
+/// sends no direct light.
 fn sun_radiance(theta_s: f64, turbidity: f64) -> DVec3 {
     let deg = theta_s.to_degrees();
+    if deg >= 90.0 {
+        return DVec3::ZERO;
+    }
     let m = 1.0 / (theta_s.cos() + 0.15 * (93.885 - deg).powf(-1.253));
     let beta = 0.04608 * turbidity - 0.04586;
     let tau = |lambda_um: f64| {
@@ -237,9 +239,15 @@ fn sun_radiance(theta_s: f64, turbidity: f64) -> DVec3 {
 }
 
 /// CIE overcast zenith luminance in map units: horizontal illuminance 300 + 21000 sin(h) lx
-/// (Krochmann's fit adopted by the CIE) over the overcast sky's 7 pi / 9.
+/// (Krochmann's fit adopted by the CIE) over the overcast sky's 7 pi / 9. With the sun below
+/// the horizon the fit goes negative; twilight illuminance falls about a decade per 3 degrees
+/// (3 lx at -6 degrees, the end of civil twilight), so it continues as 300 x 10^(h / 3) lx.
 pub fn overcast_zenith(sun_elevation_deg: f64) -> f64 {
-    let e_h = 300.0 + 21_000.0 * sun_elevation_deg.to_radians().sin();
+    let e_h = if sun_elevation_deg >= 0.0 {
+        300.0 + 21_000.0 * sun_elevation_deg.to_radians().sin()
+    } else {
+        300.0 * 10f64.powf(sun_elevation_deg / 3.0)
+    };
     9.0 * e_h / (7.0 * PI) / 1e3 / KCD_PER_UNIT
 }
 

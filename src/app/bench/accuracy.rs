@@ -248,6 +248,7 @@ fn mark_pareto(points: &mut [Point]) {
 
 pub fn run(job: &AccuracyJob) -> Result<AccuracyReport, AppError> {
     check(job)?;
+    crate::app::check_output_dir(&job.out)?;
     let t0 = Instant::now();
     let per_tess = 2 * job.spp.len() as u64;
     let progress = Progress::new(

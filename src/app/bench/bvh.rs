@@ -237,6 +237,7 @@ fn rust_row(mesh: &Arc<Mesh>, rays: (&[Ray], &[Ray])) -> BvhRow {
 }
 
 pub fn run(job: &BvhBenchJob) -> Result<BvhBenchReport, AppError> {
+    crate::app::check_output_dir(&job.out)?;
     let t0 = Instant::now();
     let pool = tracing_pool(job.threads)?;
     let threads = pool.current_num_threads();
