@@ -20,6 +20,7 @@ fn render_job_writes_exr_png_and_sidecar() {
         scene: cfg,
         out: dir.join("scene"),
         progress: false,
+        pass: None,
     };
     app::render::run(&job).unwrap();
     let sidecar: serde_json::Value =
@@ -68,6 +69,7 @@ fn bad_input_is_classed_as_input() {
         scene: cfg,
         out: tmp("bad").join("x"),
         progress: false,
+        pass: None,
     };
     let e = app::render::run(&job).unwrap_err();
     assert_eq!(e.exit_code(), 2, "{e}");

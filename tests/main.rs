@@ -7,6 +7,7 @@ mod defects;
 #[cfg(feature = "embree")]
 mod embree;
 mod lod;
+mod passes;
 mod render;
 mod sky;
 mod stress;

@@ -13,6 +13,7 @@ pub mod crosscheck;
 pub mod info;
 pub mod mesh;
 pub mod ocean;
+pub mod passes;
 pub mod render;
 pub mod sky;
 #[cfg(feature = "embree")]

@@ -9,7 +9,8 @@ use std::path::PathBuf;
 use super::{AppError, check_outputs, with_extension};
 use crate::config::SceneConfig;
 use crate::image_io::{auto_exposure, commit_all, stage_exr_with, stage_json, stage_png};
-use crate::render::pipeline::{RenderReport, render_scene};
+use crate::render::film::Samples;
+use crate::render::pipeline::{PassInfo, RenderReport, prepare, render_scene};
 
 /// A render job.
 #[derive(Clone, Debug)]
@@ -19,6 +20,8 @@ pub struct RenderJob {
     pub out: PathBuf,
     /// Show a progress bar on stderr.
     pub progress: bool,
+    /// Render only pass K of N (1-based) into PREFIX.pass (see [`super::passes`]).
+    pub pass: Option<(usize, usize)>,
 }
 
 /// Renders the scene and writes its three files; returns the sidecar.
@@ -26,6 +29,9 @@ pub struct RenderJob {
 /// (an existing set is replaced whole, or left untouched when anything fails).
 pub fn run(job: &RenderJob) -> Result<RenderReport, AppError> {
     job.scene.validate()?;
+    if let Some((k, n)) = job.pass {
+        return run_pass(job, k, n);
+    }
     let (exr, png, json) = (
         with_extension(&job.out, ".exr"),
         with_extension(&job.out, ".png"),
@@ -42,6 +48,30 @@ pub fn run(job: &RenderJob) -> Result<RenderReport, AppError> {
     let staged_json = stage_json(&json, &r.report)?;
     commit_all(vec![staged_exr, staged_png, staged_json])?;
     Ok(r.report)
+}
+
+/// Renders pass `k` of `n` into PREFIX.pass.
+fn run_pass(job: &RenderJob, k: usize, n: usize) -> Result<RenderReport, AppError> {
+    let file = with_extension(&job.out, ".pass");
+    check_outputs(std::slice::from_ref(&file))?;
+    let samples = Samples {
+        pass: k - 1,
+        passes: n,
+    };
+    let prepared = prepare(&job.scene)?;
+    let (r, states) = prepared.render_samples(&job.scene, 0, samples, job.progress)?;
+    let mut report = r.report;
+    let spp = super::passes::pass_samples(k, n, job.scene.render.spp);
+    report.spp = spp;
+    report.passes = Some(PassInfo {
+        passes: n,
+        held: vec![k],
+        missing: Vec::new(),
+        samples_per_pixel: spp,
+    });
+    report.pass_file = Some(file.clone());
+    super::passes::write_pass(&file, &report, &states)?;
+    Ok(report)
 }
 
 impl fmt::Display for RenderReport {
@@ -85,12 +115,21 @@ impl fmt::Display for RenderReport {
         for w in &self.warnings {
             writeln!(f, "  warning: {w}")?;
         }
-        write!(
-            f,
-            "  wrote {} {} {}",
-            self.exr.display(),
-            self.png.display(),
-            self.json.display()
-        )
+        match (&self.pass_file, &self.passes) {
+            (Some(file), Some(p)) => write!(
+                f,
+                "  wrote pass {:?} of {} to {} (merge the passes with `vastocean merge`)",
+                p.held,
+                p.passes,
+                file.display()
+            ),
+            _ => write!(
+                f,
+                "  wrote {} {} {}",
+                self.exr.display(),
+                self.png.display(),
+                self.json.display()
+            ),
+        }
     }
 }

@@ -59,6 +59,9 @@ enum Command {
     Bench(bench::BenchCommand),
     /// Render a scene: ocean -> LOD tessellation -> BVH (Embree or Rust) -> path tracing -> EXR + PNG + JSON.
     Render(scene::RenderArgs),
+    /// Merge the sample passes of one render (`render --pass K/N`) into its EXR, PNG and JSON,
+    /// exactly as a single render would have written them.
+    Merge(scene::MergeArgs),
     /// The paper's four scenarios (high/low tessellation x with/without normal mapping) and the
     /// near-horizon statistics against the baseline.
     Compare(scene::CompareArgs),
@@ -92,6 +95,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Info { threads, json } => emit(&app::info::run(threads)?, json),
         Command::Bench(c) => bench::run(c),
         Command::Render(a) => emit(&app::render::run(&a.job()?)?, a.json),
+        Command::Merge(a) => emit(&app::passes::Merged(app::passes::merge(&a.job())?), a.json),
         Command::Compare(a) => emit(&app::compare::run(&a.job()?)?, a.json),
         #[cfg(feature = "embree")]
         Command::Crosscheck(a) => embree::crosscheck(a),

@@ -109,9 +109,37 @@ pub struct RenderArgs {
     /// Output prefix: writes PREFIX.exr, PREFIX.png and PREFIX.json.
     #[arg(long, default_value = "out/render")]
     out: PathBuf,
+    /// Render only pass K of N (1-based: the samples s = K-1 mod N of every pixel) into
+    /// PREFIX.pass; `vastocean merge` adds the passes up into the render (README "Rendering on
+    /// many machines").
+    #[arg(long, value_parser = vastocean::app::passes::parse_pass)]
+    pass: Option<(usize, usize)>,
     /// Print the JSON sidecar on stdout.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `merge`: pass files into one render.
+#[derive(clap::Args)]
+pub struct MergeArgs {
+    /// Pass files written by `vastocean render --pass K/N` (all of one render).
+    #[arg(required = true)]
+    passes: Vec<PathBuf>,
+    /// Output prefix: writes PREFIX.exr, PREFIX.png and PREFIX.json, as a render does.
+    #[arg(long)]
+    out: PathBuf,
+    /// Print the merged JSON sidecar on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl MergeArgs {
+    pub fn job(&self) -> app::passes::MergeJob {
+        app::passes::MergeJob {
+            passes: self.passes.clone(),
+            out: self.out.clone(),
+        }
+    }
 }
 
 impl RenderArgs {
@@ -131,6 +159,7 @@ impl RenderArgs {
             scene: cfg,
             out: self.out.clone(),
             progress: true,
+            pass: self.pass,
         })
     }
 }

@@ -4,8 +4,12 @@
 //! image does not depend on the thread count (DESIGN.md, Determinism). A guard drops any
 //! sample that is NaN or infinite and counts it.
 //!
+//! A pixel's radiance sums are kept in 128-bit fixed point (2^-47 resolution, about 7e-15):
+//! integer sums do not depend on the order of their terms, so sample passes rendered apart
+//! ([`Samples`]) merge into exactly the image a single render makes (`vastocean merge`).
+//!
 //! Besides the image the film keeps what it takes to say how noisy it is:
-//! - per pixel, the sample variance of the luminance (Welford's update in f64), from which the
+//! - per pixel, the sample variance of the luminance (from exact fixed-point sums), from which the
 //!   variance of the pixel's mean follows (`var_y`, written to the EXR as `Y.variance`);
 //! - on request, batch means: the samples of each pixel dealt round-robin into `k` batches
 //!   (sample s into batch s mod k), each batch on its own rotated R2 sequence with its own
@@ -15,6 +19,7 @@
 //!   pixel by pixel, which per-image variances cannot account for, but its `k` batch
 //!   differences are independent estimates of the same thing (see `crate::analysis::error`).
 
+use ethnum::U256;
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
@@ -70,54 +75,138 @@ impl Film {
 /// Bytes a film of `pixels` pixels takes while it renders and is written: the per-pixel sums,
 /// the image, its variance, `batches` batch means, and the copies the EXR and PNG writers make.
 pub fn film_bytes(pixels: u64, batches: usize) -> u64 {
-    let per_pixel = std::mem::size_of::<PixelSums>() // sums while rendering
-        + 12 + 4 + 4 * batches // image, variance, batch means
+    let per_pixel = 2 * std::mem::size_of::<PixelState>() // the rows' states, then the film's
+        + 12 + 4 + 8 * batches // image, variance, batch means (the rows', then the film's)
         + 16 + 3; // EXR channels (R, G, B, Y.variance), PNG bytes
     pixels * per_pixel as u64
 }
 
-/// What one pixel accumulates.
+/// Units of the fixed-point radiance sums per unit of radiance: 2^47 (radiance below about
+/// 7e-15 rounds to 0). With radiances up to `crate::config::MAX_RADIANCE` (1e18 < 2^60) and at
+/// most 1e6 < 2^20 samples, sums stay below 2^127 and sums of squares below 2^234.
+const FIXED_ONE: f64 = (1u64 << 47) as f64;
+
+/// One pixel's samples in a form that merges exactly: the sample count and, in fixed point,
+/// the sums of the radiance, of the luminance and of its square (256 bits). All are integers,
+/// so any split of the samples into passes adds up to the same bits, and the variance
+/// n sum(Y^2) - (sum Y)^2 is computed exactly (no cancellation).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PixelState {
+    pub sum: [i128; 3],
+    pub sum_y: u128,
+    pub sum_y2: U256,
+    pub n: u32,
+}
+
+impl PixelState {
+    /// Bytes of one state in a pass file.
+    pub const BYTES: usize = 3 * 16 + 16 + 32 + 4;
+
+    fn add(&mut self, l: Vec3) {
+        for k in 0..3 {
+            self.sum[k] += (l[k] as f64 * FIXED_ONE).round() as i128;
+        }
+        // Radiance is >= 0 (the guard drops anything else), so is its luminance.
+        let y = (luminance(l.to_array()).max(0.0) as f64 * FIXED_ONE).round() as u128;
+        self.sum_y += y;
+        self.sum_y2 += U256::from(y) * U256::from(y);
+        self.n += 1;
+    }
+
+    /// Adds another set of samples of the same pixel.
+    pub fn merge(&mut self, o: &PixelState) {
+        for k in 0..3 {
+            self.sum[k] += o.sum[k];
+        }
+        self.sum_y += o.sum_y;
+        self.sum_y2 += o.sum_y2;
+        self.n += o.n;
+    }
+
+    /// The pixel's mean radiance.
+    pub fn mean(&self) -> [f32; 3] {
+        let n = self.n.max(1) as f64;
+        self.sum.map(|s| (s as f64 / FIXED_ONE / n) as f32)
+    }
+
+    /// Variance of the mean luminance: s^2 / n with s^2 = (n sum(Y^2) - (sum Y)^2) / (n (n - 1)).
+    pub fn var_of_mean(&self) -> f32 {
+        if self.n < 2 {
+            return 0.0;
+        }
+        let n = self.n as u128;
+        let sy = U256::from(self.sum_y);
+        // >= 0 exactly (Cauchy-Schwarz); saturate all the same.
+        let d = (self.sum_y2 * U256::from(n)).saturating_sub(sy * sy);
+        let d = d.as_f64() / (FIXED_ONE * FIXED_ONE);
+        let n = n as f64;
+        (d / (n * (n - 1.0)) / n) as f32
+    }
+
+    /// Little-endian bytes (pass files).
+    pub fn to_bytes(&self, out: &mut Vec<u8>) {
+        for s in self.sum {
+            out.extend_from_slice(&s.to_le_bytes());
+        }
+        out.extend_from_slice(&self.sum_y.to_le_bytes());
+        out.extend_from_slice(&self.sum_y2.to_le_bytes());
+        out.extend_from_slice(&self.n.to_le_bytes());
+    }
+
+    /// Reads [`Self::BYTES`] bytes written by [`Self::to_bytes`].
+    pub fn from_bytes(b: &[u8]) -> PixelState {
+        let i = |k: usize| i128::from_le_bytes(b[16 * k..16 * k + 16].try_into().unwrap());
+        PixelState {
+            sum: [i(0), i(1), i(2)],
+            sum_y: u128::from_le_bytes(b[48..64].try_into().unwrap()),
+            sum_y2: U256::from_le_bytes(b[64..96].try_into().unwrap()),
+            n: u32::from_le_bytes(b[96..100].try_into().unwrap()),
+        }
+    }
+}
+
+/// Which of a pixel's `spp` samples a render takes: those with index s = `pass` mod `passes`
+/// (all of them for pass 0 of 1). The samples of passes 0..passes are disjoint and together
+/// are exactly those of one render.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Samples {
+    pub pass: usize,
+    pub passes: usize,
+}
+
+impl Samples {
+    pub const ALL: Samples = Samples { pass: 0, passes: 1 };
+}
+
+/// What one pixel accumulates: its state and the luminance sums of its batches.
 #[derive(Clone, Copy, Default)]
 struct PixelSums {
-    sum: [f64; 3],
-    /// Luminance sums and sample counts of the batches.
+    state: PixelState,
     batch: [f64; MAX_BATCHES],
     batch_n: [u32; MAX_BATCHES],
-    /// Welford's running mean and sum of squared deviations of the luminance.
-    n: u32,
-    mean_y: f64,
-    m2_y: f64,
 }
 
 impl PixelSums {
     fn add(&mut self, batch: usize, l: Vec3) {
-        for k in 0..3 {
-            self.sum[k] += l[k] as f64;
-        }
-        self.n += 1;
+        self.state.add(l);
         let y = luminance(l.to_array()) as f64;
         self.batch[batch] += y;
         self.batch_n[batch] += 1;
-        let delta = y - self.mean_y;
-        self.mean_y += delta / self.n as f64;
-        self.m2_y += delta * (y - self.mean_y);
     }
+}
 
-    fn mean(sum: &[f64; 3], n: u32) -> [f32; 3] {
-        let n = n.max(1) as f64;
-        [
-            (sum[0] / n) as f32,
-            (sum[1] / n) as f32,
-            (sum[2] / n) as f32,
-        ]
-    }
-
-    /// Variance of the mean luminance: s^2 / n with s^2 = M2 / (n - 1).
-    fn var_of_mean(&self) -> f32 {
-        if self.n < 2 {
-            0.0
-        } else {
-            (self.m2_y / (self.n - 1) as f64 / self.n as f64) as f32
+impl Film {
+    /// The film of `w` x `h` pixel states (row-major) rendered at `spp` samples per pixel.
+    pub fn from_states(w: usize, h: usize, spp: u32, states: &[PixelState]) -> Film {
+        let mut image = RgbImage::new(w, h);
+        for (p, s) in image.pixels.iter_mut().zip(states) {
+            *p = s.mean();
+        }
+        Film {
+            image,
+            var_y: states.iter().map(PixelState::var_of_mean).collect(),
+            spp,
+            batches: None,
         }
     }
 }
@@ -136,6 +225,34 @@ pub fn render_image(
     batches: usize,
     progress: bool,
 ) -> (Film, Counters) {
+    let (film, _, c) = render_image_samples(
+        scene,
+        camera,
+        camera_height_m,
+        spp,
+        seed,
+        settings,
+        batches,
+        Samples::ALL,
+        progress,
+    );
+    (film, c)
+}
+
+/// [`render_image`] taking only the `samples` of `spp` (all, or one pass); also returns each
+/// pixel's state, which merges exactly with other passes'.
+#[allow(clippy::too_many_arguments)]
+pub fn render_image_samples(
+    scene: &SceneRef,
+    camera: &Camera,
+    camera_height_m: f32,
+    spp: u32,
+    seed: u64,
+    settings: &TraceSettings,
+    batches: usize,
+    samples: Samples,
+    progress: bool,
+) -> (Film, Vec<PixelState>, Counters) {
     // Samples are dealt into k sequences whatever is kept, so an image does not depend on
     // whether batch means were asked for.
     let k = MAX_BATCHES;
@@ -151,7 +268,7 @@ pub fn render_image(
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let origin = [0.0, camera_height_m, 0.0];
-    let rows: Vec<(Vec<PixelSums>, Counters)> = (0..h)
+    let rows: Vec<(Vec<PixelState>, Vec<f32>, Counters)> = (0..h)
         .into_par_iter()
         .map(|y| {
             let mut c = Counters::default();
@@ -165,7 +282,7 @@ pub fn render_image(
                         let mut rot = Rng::keyed(&[seed, pixel, u64::MAX - b as u64]);
                         (rot.f64(), rot.f64())
                     });
-                    for s in 0..spp {
+                    for s in (samples.pass as u32..spp).step_by(samples.passes) {
                         let b = s as usize % k;
                         let ((ox, oy), j) = (offsets[b], (s as usize / k) as f64);
                         let jx = (ox + j * R2.0).fract() as f32;
@@ -189,40 +306,39 @@ pub fn render_image(
                     }
                     acc
                 })
-                .collect();
+                .collect::<Vec<PixelSums>>();
             bar.inc(1);
-            (row, c)
+            // Each row keeps only the states and the batch means (not the sums of every
+            // batch): the film's peak memory stays near the states'.
+            let means = row
+                .iter()
+                .flat_map(|p| (0..keep).map(|j| (p.batch[j] / p.batch_n[j].max(1) as f64) as f32))
+                .collect();
+            (row.iter().map(|p| p.state).collect(), means, c)
         })
         .collect();
     bar.finish_and_clear();
-    let mut film = Film {
-        image: RgbImage::new(w, h),
-        var_y: vec![0.0; w * h],
-        spp,
-        batches: (keep >= 2).then(|| Batches {
-            k: keep,
-            // Sequence s mod k feeds batch (s mod k) mod keep.
-            spp: (0..keep)
-                .map(|b| (0..spp as usize).filter(|s| (s % k) % keep == b).count() as u32)
-                .collect(),
-            luminance: vec![0.0; w * h * keep],
-        }),
-    };
+    let mut states = Vec::with_capacity(w * h);
+    let mut batch_means = (keep >= 2).then(|| Batches {
+        k: keep,
+        // Sequence s mod k feeds batch (s mod k) mod keep.
+        spp: (0..keep)
+            .map(|b| (0..spp as usize).filter(|s| (s % k) % keep == b).count() as u32)
+            .collect(),
+        luminance: Vec::with_capacity(w * h * keep),
+    });
     let mut counters = Counters::default();
-    for (y, (row, c)) in rows.into_iter().enumerate() {
-        for (x, p) in row.iter().enumerate() {
-            let i = y * w + x;
-            film.image.pixels[i] = PixelSums::mean(&p.sum, p.n);
-            film.var_y[i] = p.var_of_mean();
-            if let Some(b) = &mut film.batches {
-                for j in 0..keep {
-                    b.luminance[i * keep + j] = (p.batch[j] / p.batch_n[j].max(1) as f64) as f32;
-                }
-            }
+    // Rows are freed as they are moved into the film.
+    for (row, means, c) in rows {
+        states.extend_from_slice(&row);
+        if let Some(b) = &mut batch_means {
+            b.luminance.extend_from_slice(&means);
         }
         counters += c;
     }
-    (film, counters)
+    let mut film = Film::from_states(w, h, spp, &states);
+    film.batches = batch_means;
+    (film, states, counters)
 }
 
 #[cfg(test)]
@@ -230,12 +346,13 @@ mod tests {
     use super::*;
 
     #[test]
-    fn welford_and_batches_match_direct_formulas() {
+    fn variance_and_batches_match_direct_formulas() {
         let samples = [0.5f32, 2.0, 1.25, 7.0, 0.0];
-        let mut p = PixelSums::default();
+        let mut sums = PixelSums::default();
         for (s, &v) in samples.iter().enumerate() {
-            p.add(s % 2, Vec3::splat(v));
+            sums.add(s % 2, Vec3::splat(v));
         }
+        let p = sums.state;
         let n = samples.len() as f64;
         let mean = samples.iter().map(|&v| v as f64).sum::<f64>() / n;
         let var = samples
@@ -244,15 +361,39 @@ mod tests {
             .sum::<f64>()
             / (n - 1.0);
         assert!((p.var_of_mean() as f64 - var / n).abs() < 1e-6 * var);
-        assert_eq!(&p.batch_n[..2], &[3, 2]);
+        assert_eq!(&sums.batch_n[..2], &[3, 2]);
         let even = (0.5 + 1.25 + 0.0) / 3.0;
-        assert!((p.batch[0] / 3.0 - even).abs() < 1e-6);
-        assert!((p.batch[1] / 2.0 - 4.5).abs() < 1e-6);
+        assert!((sums.batch[0] / 3.0 - even).abs() < 1e-6);
+        assert!((sums.batch[1] / 2.0 - 4.5).abs() < 1e-6);
         let one = {
-            let mut q = PixelSums::default();
-            q.add(0, Vec3::ONE);
+            let mut q = PixelState::default();
+            q.add(Vec3::ONE);
             q
         };
         assert_eq!(one.var_of_mean(), 0.0);
+    }
+
+    #[test]
+    fn states_merge_exactly_in_any_order_and_round_trip_through_bytes() {
+        let values = [0.3f32, 1e-9, 2000.0, 0.07, 5.5, 1e6, 0.0, 0.123_456_7];
+        let mut whole = PixelState::default();
+        values
+            .iter()
+            .for_each(|&v| whole.add(Vec3::new(v, 0.5 * v, 2.0 * v)));
+        // Split three ways (s mod 3), merged in a scrambled order.
+        let mut parts = [PixelState::default(); 3];
+        for (s, &v) in values.iter().enumerate() {
+            parts[s % 3].add(Vec3::new(v, 0.5 * v, 2.0 * v));
+        }
+        let mut merged = parts[2];
+        merged.merge(&parts[0]);
+        merged.merge(&parts[1]);
+        assert_eq!(merged, whole);
+        assert_eq!(merged.mean(), whole.mean());
+        assert_eq!(merged.var_of_mean(), whole.var_of_mean());
+        let mut bytes = Vec::new();
+        merged.to_bytes(&mut bytes);
+        assert_eq!(bytes.len(), PixelState::BYTES);
+        assert_eq!(PixelState::from_bytes(&bytes), merged);
     }
 }

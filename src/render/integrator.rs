@@ -68,7 +68,7 @@ impl TraceSettings {
 }
 
 /// Per-render counts, summed over threads.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct Counters {
     /// Rays handed to the tracer.
     pub rays: u64,

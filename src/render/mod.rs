@@ -11,5 +11,5 @@ pub mod water;
 pub use crate::config::{NormalMode, Projection, Water};
 pub use crate::sky::{AnalyticSky, Sky};
 pub use camera::Camera;
-pub use film::render_image;
+pub use film::{render_image, render_image_samples};
 pub use integrator::{Counters, SceneRef, TraceSettings};

@@ -7,12 +7,12 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use super::film::Film;
+use super::film::{Film, PixelState, Samples};
 use super::integrator::max_descent_slope;
-use super::{Camera, Counters, SceneRef, TraceSettings, render_image};
+use super::{Camera, Counters, SceneRef, TraceSettings, render_image_samples};
 use crate::accel::bvh::Bvh;
 #[cfg(feature = "embree")]
 use crate::accel::embree::{BuildOptions, Device, EmbreeError, Scene};
@@ -115,8 +115,21 @@ pub fn surface_height_at_nadir(sampler: &crate::ocean::Sampler) -> f64 {
     sampler.sample(u, v).height as f64
 }
 
+/// Which sample passes a render holds (see `vastocean render --pass`, `vastocean merge`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PassInfo {
+    /// Passes the render was split into.
+    pub passes: usize,
+    /// The passes it holds, 1-based.
+    pub held: Vec<usize>,
+    /// The passes it lacks (the image then has fewer samples than `spp`).
+    pub missing: Vec<usize>,
+    /// Samples per pixel the held passes add up to.
+    pub samples_per_pixel: u32,
+}
+
 /// The JSON sidecar of a render (also printed by `vastocean render --json`).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct RenderReport {
     pub width: usize,
     pub height: usize,
@@ -171,6 +184,12 @@ pub struct RenderReport {
     pub sky_irradiance: [f32; 3],
     pub upwelling: [f32; 3],
     pub counters: Counters,
+    /// For a pass or a merge of passes: which.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub passes: Option<PassInfo>,
+    /// The pass file a `--pass` render wrote (instead of the three files below).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pass_file: Option<PathBuf>,
     pub exr: PathBuf,
     pub png: PathBuf,
     pub json: PathBuf,
@@ -337,6 +356,18 @@ impl Prepared {
         batches: usize,
         progress: bool,
     ) -> Result<Rendered, RenderError> {
+        Ok(self.render_samples(cfg, batches, Samples::ALL, progress)?.0)
+    }
+
+    /// As [`Prepared::render_batches`], taking only `samples` of each pixel's (one pass of
+    /// several), and returning each pixel's state as well (what a pass file holds).
+    pub fn render_samples(
+        &self,
+        cfg: &SceneConfig,
+        batches: usize,
+        samples: Samples,
+        progress: bool,
+    ) -> Result<(Rendered, Vec<PixelState>), RenderError> {
         cfg.validate()?;
         let camera = Camera::new(cfg.camera.projection, cfg.camera.width, cfg.camera.aspect);
         let sampler = self.ocean.sampler(self.camera_position_m);
@@ -351,8 +382,8 @@ impl Prepared {
         let mut settings = TraceSettings::new(cfg, self.sky_irradiance);
         settings.must_hit_below_y = self.must_hit_below_y(cfg.camera.height_m);
         let t = Instant::now();
-        let (film, c) = self.pool.install(|| {
-            render_image(
+        let (film, states, c) = self.pool.install(|| {
+            render_image_samples(
                 &scene_ref,
                 &camera,
                 cfg.camera.height_m as f32,
@@ -360,6 +391,7 @@ impl Prepared {
                 cfg.render.seed,
                 &settings,
                 batches,
+                samples,
                 progress,
             )
         });
@@ -372,19 +404,7 @@ impl Prepared {
         }
         let seconds_normal_map = c.normal_map_thread_seconds() / self.threads as f64;
         let folded_fraction = self.ocean.summary().folded_fraction;
-        let mut warnings = Vec::new();
-        if folded_fraction > 0.0 {
-            warnings.push(format!(
-                "{:.3}% of the sea surface folds over itself (Jacobian <= 0); lower ocean.choppiness to avoid it",
-                100.0 * folded_fraction
-            ));
-        }
-        if c.escaped_below_horizon > 0 {
-            warnings.push(format!(
-                "{} camera rays below the horizon met no water (holes in the tessellation)",
-                c.escaped_below_horizon
-            ));
-        }
+        let warnings = warnings(folded_fraction, c.escaped_below_horizon);
         let mesh = self.accel.mesh();
         let seconds_build = self.seconds_build;
         let report = RenderReport {
@@ -428,21 +448,43 @@ impl Prepared {
             sky_irradiance: self.sky_irradiance.to_array(),
             upwelling: cfg.water.upwelling(self.sky_irradiance).to_array(),
             counters: c,
+            passes: None,
+            pass_file: None,
             exr: PathBuf::new(),
             png: PathBuf::new(),
             json: PathBuf::new(),
             config: cfg.clone(),
         };
-        Ok(Rendered {
-            film,
-            camera,
-            report,
-        })
+        Ok((
+            Rendered {
+                film,
+                camera,
+                report,
+            },
+            states,
+        ))
     }
 }
 
+/// What a render warns of: folding and holes.
+pub fn warnings(folded_fraction: f64, escaped_below_horizon: u64) -> Vec<String> {
+    let mut w = Vec::new();
+    if folded_fraction > 0.0 {
+        w.push(format!(
+            "{:.3}% of the sea surface folds over itself (Jacobian <= 0); lower ocean.choppiness to avoid it",
+            100.0 * folded_fraction
+        ));
+    }
+    if escaped_below_horizon > 0 {
+        w.push(format!(
+            "{escaped_below_horizon} camera rays below the horizon met no water (holes in the tessellation)"
+        ));
+    }
+    w
+}
+
 /// Mean relative luminance of an image (for relative noise figures; at least 1e-30).
-fn mean_luminance(img: &crate::image_io::RgbImage) -> f64 {
+pub fn mean_luminance(img: &crate::image_io::RgbImage) -> f64 {
     let sum: f64 = img
         .pixels
         .iter()
