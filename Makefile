@@ -9,7 +9,7 @@ DEB_PKGS   := libembree-dev libclang-dev pkg-config gcc fonts-dejavu-core parall
 SUDO       := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 OUT        ?= out
 
-.PHONY: setup build run test test-full bench bench-report study lint embree4-check clean
+.PHONY: setup build run test test-full bench bench-report study lint embree4-check embree4-test clean
 
 # Installs only the packages that are missing; apt-get update runs only when something is.
 setup:
@@ -74,6 +74,11 @@ lint: setup
 # the shim cannot rot on a Debian 12 machine.
 embree4-check:
 	bash .ci/embree4-check
+
+# Builds against a real Embree 4 (4.4 from PyPI's embreex wheel, Debian 13's headers; nothing is
+# installed) into target/embree4 and runs the test suite and the cross-check on it.
+embree4-test: setup
+	bash .ci/embree4-test
 
 clean:
 	$(CARGO) clean

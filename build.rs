@@ -100,6 +100,8 @@ fn main() {
 
     if let Some(lib) = &embree.lib_dir {
         println!("cargo:rustc-link-search=native={}", lib.display());
+        // An Embree outside the system's library path is found at run time by the rpath.
+        println!("cargo:rustc-link-arg=-Wl,-rpath,{}", lib.display());
     }
     println!("cargo:rustc-link-lib=dylib=embree{}", embree.major);
 
