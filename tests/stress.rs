@@ -62,7 +62,7 @@ fn the_checks_fail_when_they_should() {
 }
 
 #[test]
-#[ignore = "the quick matrix through the binary: about a minute in release"]
+#[ignore = "the quick matrix through the binary: seconds in release"]
 fn the_quick_matrix_passes_through_the_binary() {
     let o = out("quick");
     let run = std::process::Command::new(env!("CARGO_BIN_EXE_vastocean"))
