@@ -167,10 +167,12 @@ fn a_pinhole_looking_down_sees_no_holes_and_holes_are_counted() {
         assert_eq!(code, 0, "{err}");
         let j = sidecar(&dir);
         assert_eq!(j["escaped_below_horizon"], 0, "{toml}");
+        let warnings = j["warnings"].as_array().unwrap();
         assert!(
-            j["warnings"].as_array().unwrap().is_empty(),
-            "{toml}: {}",
-            j["warnings"]
+            !warnings
+                .iter()
+                .any(|w| w.as_str().unwrap().contains("holes")),
+            "{toml}: {warnings:?}"
         );
     }
     // The count has teeth: a tessellation cut 200 m out leaves the sea beyond it a hole.

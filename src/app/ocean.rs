@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use serde::Serialize;
 
 use super::AppError;
+use crate::ocean::repeat::{RepeatCorrelation, profile_csv, repeat_correlation};
 use crate::ocean::{OceanParams, OceanSummary, Surface, write_preview_png};
 
 /// An ocean job.
@@ -16,6 +17,8 @@ pub struct OceanJob {
     pub seed: u64,
     /// Write the preview here, covering this many metres (default: the coarsest layer).
     pub png: Option<(PathBuf, Option<f64>)>,
+    /// Write the surface along a line here: from (x0, z0) to (x1, z1), world metres, n points.
+    pub profile: Option<(PathBuf, [f64; 2], [f64; 2], usize)>,
 }
 
 /// What was generated.
@@ -23,6 +26,10 @@ pub struct OceanJob {
 pub struct OceanReport {
     #[serde(flatten)]
     pub summary: OceanSummary,
+    /// How much the summed surface repeats itself (see `crate::ocean::repeat`).
+    pub repeat_correlation: RepeatCorrelation,
+    /// Inputs outside the models' range (see `crate::ocean::Spectrum::validity_warnings`).
+    pub validity_warnings: Vec<String>,
     #[serde(skip)]
     pub params: OceanParams,
     #[serde(skip)]
@@ -32,7 +39,7 @@ pub struct OceanReport {
 impl OceanReport {
     /// Warnings a user should see (on stderr).
     pub fn warnings(&self) -> Vec<String> {
-        let mut w = Vec::new();
+        let mut w = self.validity_warnings.clone();
         if self.summary.folded_fraction > 0.0 {
             w.push(format!(
                 "{:.3}% of the surface folds over itself (Jacobian <= 0); lower --choppiness to avoid it",
@@ -48,14 +55,33 @@ pub fn run(job: &OceanJob) -> Result<OceanReport, AppError> {
     if let Some((path, _)) = &job.png {
         super::check_outputs(std::slice::from_ref(path))?;
     }
+    if let Some((path, from, to, n)) = &job.profile {
+        if !(from.iter().chain(to).all(|v| v.is_finite()) && (2..=10_000_000).contains(n)) {
+            return Err(AppError::input(format!(
+                "a profile is X0,Z0,X1,Z1,N with finite ends and 2 <= N <= 10000000 (got {from:?} {to:?} {n})"
+            )));
+        }
+        super::check_outputs(std::slice::from_ref(path))?;
+    }
     let surface = Surface::new(&job.params, job.seed)?;
     let summary = surface.summary();
+    let sampler = surface.sampler([0.0, 0.0]);
+    let repeat_correlation = repeat_correlation(&sampler, job.params.wind_dir_deg);
+    let validity_warnings = surface
+        .spectrum()
+        .map_or_else(Vec::new, |s| s.validity_warnings());
+    if let Some((path, from, to, n)) = &job.profile {
+        let csv = profile_csv(&sampler, *from, *to, *n);
+        crate::image_io::write_atomically(path, |w| std::io::Write::write_all(w, csv.as_bytes()))?;
+    }
     if let Some((path, extent)) = &job.png {
         let extent = extent.unwrap_or(job.params.layers[0].size_m);
         write_preview_png(&surface, path, 1024, extent)?;
     }
     Ok(OceanReport {
         summary,
+        repeat_correlation,
+        validity_warnings,
         params: job.params.clone(),
         png: job.png.as_ref().map(|p| p.0.clone()),
     })
@@ -93,6 +119,16 @@ impl fmt::Display for OceanReport {
         writeln!(f, "  Hs                {:.3} m", s.hs_m)?;
         writeln!(f, "  peak wavelength   {:.2} m", s.peak_wavelength_m)?;
         writeln!(f, "  folded fraction   {:.5}", s.folded_fraction)?;
+        let r = &self.repeat_correlation;
+        writeln!(
+            f,
+            "  repeat correlation {:.3} (along the wind {:.3} at {:.0} m, across {:.3} at {:.0} m)",
+            r.max,
+            r.along_wind.correlation,
+            r.along_wind.lag_m,
+            r.across_wind.correlation,
+            r.across_wind.lag_m
+        )?;
         write!(f, "  generated in      {:.3} s", s.seconds)?;
         if let Some(png) = &self.png {
             write!(f, "\n  preview           {}", png.display())?;

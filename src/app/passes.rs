@@ -257,7 +257,11 @@ pub fn merge(job: &MergeJob) -> Result<RenderReport, AppError> {
     r.self_hits = c.self_hits;
     r.mrays_per_s = c.rays as f64 / r.seconds_trace.max(1e-12) / 1e6;
     r.normal_map_share = r.seconds_normal_map / r.seconds_trace.max(1e-12);
-    r.warnings = warnings(r.folded_fraction, c.escaped_below_horizon);
+    r.warnings = warnings(
+        &r.ocean_warnings,
+        r.folded_fraction,
+        c.escaped_below_horizon,
+    );
 
     let film = Film::from_states(r.width, r.height, samples_per_pixel, &states);
     r.noise_rms = film.noise_rms();

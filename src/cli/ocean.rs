@@ -40,6 +40,13 @@ pub struct OceanArgs {
     /// Preview extent, metres (default: the coarsest layer's size).
     #[arg(long)]
     png_extent: Option<f64>,
+    /// Sample the surface along a line X0,Z0,X1,Z1,N (world metres, N points) into --csv: x, z,
+    /// h, Dx, Dz and the normal, to check the repeat correlation independently.
+    #[arg(long, value_parser = parse_profile, requires = "csv")]
+    profile: Option<([f64; 2], [f64; 2], usize)>,
+    /// Where --profile writes its CSV.
+    #[arg(long, requires = "profile")]
+    csv: Option<PathBuf>,
     #[arg(long)]
     pub json: bool,
 }
@@ -47,6 +54,17 @@ pub struct OceanArgs {
 /// A newtype so clap treats the whole list as one value.
 #[derive(Clone, Debug)]
 pub struct Layers(Vec<LayerSpec>);
+
+fn parse_profile(s: &str) -> Result<([f64; 2], [f64; 2], usize), String> {
+    let bad = || format!("a profile is X0,Z0,X1,Z1,N, e.g. 0,0,2000,0,2001 (got `{s}`)");
+    let v: Vec<&str> = s.split(',').map(str::trim).collect();
+    if v.len() != 5 {
+        return Err(bad());
+    }
+    let f = |i: usize| v[i].parse::<f64>().map_err(|_| bad());
+    let n = v[4].parse::<usize>().map_err(|_| bad())?;
+    Ok(([f(0)?, f(1)?], [f(2)?, f(3)?], n))
+}
 
 fn parse_layers(s: &str) -> Result<Layers, String> {
     let layer = |pair: &str| {
@@ -85,6 +103,10 @@ impl OceanArgs {
             },
             seed: self.seed,
             png: self.png.clone().map(|p| (p, self.png_extent)),
+            profile: match (&self.profile, &self.csv) {
+                (Some((from, to, n)), Some(csv)) => Some((csv.clone(), *from, *to, *n)),
+                _ => None,
+            },
         }
     }
 }

@@ -8,6 +8,7 @@
 
 pub mod layer;
 pub mod preview;
+pub mod repeat;
 pub mod spectrum;
 pub mod surface;
 

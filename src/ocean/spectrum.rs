@@ -134,6 +134,14 @@ pub fn cos_2s(theta: f64, s: f64) -> f64 {
     (ln_q + 2.0 * s * c.ln()).exp()
 }
 
+/// g F / U^2 beyond which a sea is fully developed: JONSWAP's omega_p = 22 (g^2 / (U F))^(1/3)
+/// meets Pierson-Moskowitz's 0.855 g / U at (22 / 0.855)^3.
+pub const FULLY_DEVELOPED_FETCH: f64 = 17_035.0;
+
+/// The largest spreading exponent at the peak the warnings accept (Goda 1985: s_max = 10 for
+/// wind waves, 25 for swell with short decay distance, 75 for swell with long decay distance).
+pub const MAX_PEAK_SPREADING: f64 = 75.0;
+
 /// Mitsuyasu's exponent s(omega) (Mitsuyasu et al. 1975, as in Horvath 2015 eq. 33-34).
 pub fn mitsuyasu_s(omega: f64, omega_p: f64, u: f64) -> f64 {
     let s_p = 11.5 * (G / (omega_p * u)).powf(2.5);
@@ -217,6 +225,42 @@ impl Spectrum {
             omega_p,
             omega_cut,
         }
+    }
+
+    /// The dimensionless fetch g F / U^2 (TMA and JONSWAP; `None` for the others).
+    pub fn dimensionless_fetch(&self) -> Option<f64> {
+        matches!(self.kind, SpectrumKind::Tma | SpectrumKind::Jonswap)
+            .then(|| G * self.fetch_m / (self.wind_speed * self.wind_speed))
+    }
+
+    /// Mitsuyasu's spreading exponent at the spectral peak (`None` for other spreadings).
+    pub fn peak_spreading_exponent(&self) -> Option<f64> {
+        (self.spreading == SpreadingKind::Mitsuyasu)
+            .then(|| mitsuyasu_s(self.omega_p, self.omega_p, self.wind_speed))
+    }
+
+    /// Where the inputs leave the models' range: a fetch past full development (g F / U^2 >
+    /// [`FULLY_DEVELOPED_FETCH`], where the JONSWAP peak would fall below Pierson-Moskowitz's
+    /// 0.855 g / U) and a spreading exponent at the peak above [`MAX_PEAK_SPREADING`] (Goda's
+    /// largest, for long-travelled swell; wind seas are near 10).
+    pub fn validity_warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        if let Some(f) = self.dimensionless_fetch()
+            && f > FULLY_DEVELOPED_FETCH
+        {
+            w.push(format!(
+                "the dimensionless fetch g F / U^2 = {f:.3e} is past full development ({FULLY_DEVELOPED_FETCH:.3e}): JONSWAP's fetch laws put the peak at omega_p U / g = {:.2}, below the fully developed 0.855",
+                self.omega_p * self.wind_speed / G
+            ));
+        }
+        if let Some(s) = self.peak_spreading_exponent()
+            && s > MAX_PEAK_SPREADING
+        {
+            w.push(format!(
+                "Mitsuyasu's spreading exponent at the peak is {s:.0}, above {MAX_PEAK_SPREADING:.0} (Goda's value for long-travelled swell): the waves are nearly unidirectional, long-crested"
+            ));
+        }
+        w
     }
 
     /// Frequency spectrum S(omega), m^2 s: the variance is its integral over omega > 0.

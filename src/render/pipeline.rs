@@ -170,7 +170,11 @@ pub struct RenderReport {
     pub escaped_below_horizon: u64,
     /// Rays spawned at a hit that met their own triangle again. Should be 0.
     pub self_hits: u64,
-    /// Things worth knowing about the render (folding, holes), also printed.
+    /// The sea state's inputs outside the models' range (see
+    /// `crate::ocean::Spectrum::validity_warnings`).
+    #[serde(default)]
+    pub ocean_warnings: Vec<String>,
+    /// Things worth knowing about the render (the ocean's warnings, folding, holes), also printed.
     pub warnings: Vec<String>,
     /// Rays the backend refused for a NaN or infinite origin or direction (answered as misses).
     pub rejected_rays: u64,
@@ -404,7 +408,11 @@ impl Prepared {
         }
         let seconds_normal_map = c.normal_map_thread_seconds() / self.threads as f64;
         let folded_fraction = self.ocean.summary().folded_fraction;
-        let warnings = warnings(folded_fraction, c.escaped_below_horizon);
+        let ocean_warnings = self
+            .ocean
+            .spectrum()
+            .map_or_else(Vec::new, |s| s.validity_warnings());
+        let warnings = warnings(&ocean_warnings, folded_fraction, c.escaped_below_horizon);
         let mesh = self.accel.mesh();
         let seconds_build = self.seconds_build;
         let report = RenderReport {
@@ -438,6 +446,7 @@ impl Prepared {
             folded_fraction,
             escaped_below_horizon: c.escaped_below_horizon,
             self_hits: c.self_hits,
+            ocean_warnings,
             warnings,
             rejected_rays: self.accel.rejected_rays(),
             wrong_side_count: c.wrong_side,
@@ -466,9 +475,9 @@ impl Prepared {
     }
 }
 
-/// What a render warns of: folding and holes.
-pub fn warnings(folded_fraction: f64, escaped_below_horizon: u64) -> Vec<String> {
-    let mut w = Vec::new();
+/// What a render warns of: the sea state's validity, folding and holes.
+pub fn warnings(ocean: &[String], folded_fraction: f64, escaped_below_horizon: u64) -> Vec<String> {
+    let mut w = ocean.to_vec();
     if folded_fraction > 0.0 {
         w.push(format!(
             "{:.3}% of the sea surface folds over itself (Jacobian <= 0); lower ocean.choppiness to avoid it",
