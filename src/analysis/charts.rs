@@ -7,7 +7,7 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::plot::draw_png;
+use super::plot::{draw_legend, draw_png};
 
 /// Colours of successive series.
 const PALETTE: [RGBColor; 8] = [
@@ -110,14 +110,7 @@ pub fn log_log(
                 .draw_series(s.points.iter().map(|&p| Circle::new(p, 3, color.filled())))
                 .map_err(e)?;
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()
-            .map_err(e)?;
+        draw_legend(&mut chart, SeriesLabelPosition::UpperLeft, 14).map_err(e)?;
         Ok(())
     })
 }
@@ -209,14 +202,7 @@ pub fn frontier(
                 )))
                 .map_err(e)?;
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(e)?;
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 14).map_err(e)?;
         Ok(())
     })
 }
@@ -312,14 +298,7 @@ pub fn scatter(
                     _ => Cross::new((x + 10, y), 5, color.stroke_width(2)).into_dyn(),
                 });
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 13))
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()
-            .map_err(e)?;
+        draw_legend(&mut chart, SeriesLabelPosition::UpperLeft, 13).map_err(e)?;
         Ok(())
     })
 }

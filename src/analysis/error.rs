@@ -152,7 +152,8 @@ fn mean(v: impl Iterator<Item = f64>) -> f64 {
     s / n.max(1) as f64
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
+/// Median of a list (NaN when empty).
+pub(crate) fn median(mut v: Vec<f64>) -> f64 {
     if v.is_empty() {
         return f64::NAN;
     }
@@ -828,6 +829,8 @@ mod tests {
             glint_rows(&[(0.1, 0.01), (2.0, 2.0), (0.1, 0.01), (2.5, 2.4)].map(|(s, n)| row(s, n)));
         assert_eq!(g, [false, true, false, true]);
         assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(vec![4.0, 1.0, 2.0, 3.0]), 2.5);
+        assert!(median(Vec::new()).is_nan());
     }
 
     use crate::config::Projection;

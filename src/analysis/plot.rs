@@ -158,14 +158,7 @@ pub fn stats_plot(
                         PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3))
                     });
             }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 14))
-                .position(SeriesLabelPosition::UpperLeft)
-                .draw()
-                .map_err(e)?;
+            draw_legend(&mut chart, SeriesLabelPosition::UpperLeft, 14).map_err(e)?;
         }
         Ok(())
     })
@@ -204,4 +197,19 @@ pub fn contact_sheet(
         }
         Ok(())
     })
+}
+
+/// Draws a chart's legend (its series labels) in a white box at `position`.
+pub(crate) fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+    font_size: u32,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", font_size))
+        .position(position)
+        .draw()
 }

@@ -14,11 +14,12 @@ use glam::Vec3;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::{Progress, median, near_size_for, near_size_lod};
+use super::{Progress, near_size_for, near_size_lod};
 use crate::accel::bvh::Bvh;
 use crate::accel::embree::{BuildOptions, Device, Quality, Scene};
 use crate::accel::{Accel, Ray, tracing_pool};
 use crate::analysis::charts::{Series, log_log};
+use crate::analysis::error::median;
 use crate::app::AppError;
 use crate::config::{CameraConfig, OceanParams};
 use crate::image_io::{stage, write_json};

@@ -10,18 +10,6 @@ pub mod bvh;
 
 use crate::config::{LodChoice, LodConfig};
 
-/// Median of a non-empty list.
-#[cfg_attr(not(feature = "embree"), allow(dead_code))]
-pub(crate) fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let m = v.len() / 2;
-    if v.len() % 2 == 1 {
-        v[m]
-    } else {
-        0.5 * (v[m - 1] + v[m])
-    }
-}
-
 /// A custom doubling tessellation with `near_size_m` triangles at the camera and the paper's
 /// 18 m double distance.
 pub(crate) fn near_size_lod(near_size_m: f64) -> LodConfig {
@@ -99,7 +87,5 @@ mod tests {
         // 62 N^2 + 36 N: N = 600 (3 cm) and N = 20 (90 cm).
         assert!((near_size_for(22_341_600.0) - 0.03).abs() < 1e-12);
         assert!((near_size_for(25_520.0) - 0.9).abs() < 1e-12);
-        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
-        assert_eq!(median(vec![4.0, 1.0, 2.0, 3.0]), 2.5);
     }
 }
