@@ -40,7 +40,11 @@ pub struct CrossReport {
     /// either backend's triangle, or both hits lie at the same t within [`TIE_TOLERANCE`].
     pub explained_disagreements: usize,
     pub unexplained_disagreements: usize,
-    /// Largest `|t_rust - t_embree| / t_embree` over rays that hit the same triangle.
+    /// Largest `|t_rust - t_embree| |cos theta| / t_embree` over rays that hit the same
+    /// triangle, theta between the ray and the triangle's normal: how far apart the two hit
+    /// points lie across the triangle's plane, relative to the distance. (t itself is
+    /// ill-conditioned by 1 / |cos theta| at grazing incidence: a plane-distance rounding of d
+    /// moves the hit by d / |cos theta| along the ray.)
     pub max_rel_dt: f64,
     pub embree_mrays_per_s: f64,
     pub rust_mrays_per_s: f64,
@@ -125,7 +129,7 @@ fn compare(mesh: &Mesh, ray: &Ray, embree: Option<Hit>, rust: Option<Hit>) -> Ou
         (None, None) => Outcome::BothMiss,
         (Some(e), Some(r)) if e.prim == r.prim => {
             let dt = (r.t as f64 - e.t as f64).abs() / (e.t as f64).abs().max(f64::MIN_POSITIVE);
-            Outcome::SamePrim(dt)
+            Outcome::SamePrim(dt * cos_incidence(ray, mesh.triangle(e.prim)))
         }
         (e, r) => {
             let tie = match (e, r) {
@@ -146,6 +150,23 @@ fn compare(mesh: &Mesh, ray: &Ray, embree: Option<Hit>, rust: Option<Hit>) -> Ou
             }
         }
     }
+}
+
+/// |cos| of the angle between the ray and the triangle's normal (1 for a degenerate triangle).
+fn cos_incidence(ray: &Ray, [a, b, c]: [[f32; 3]; 3]) -> f64 {
+    let sub = |p: [f32; 3], q: [f32; 3]| [0, 1, 2].map(|i| p[i] as f64 - q[i] as f64);
+    let (e1, e2) = (sub(b, a), sub(c, a));
+    let n = [
+        e1[1] * e2[2] - e1[2] * e2[1],
+        e1[2] * e2[0] - e1[0] * e2[2],
+        e1[0] * e2[1] - e1[1] * e2[0],
+    ];
+    let d = ray.dir.map(f64::from);
+    let norm = (n.iter().map(|x| x * x).sum::<f64>() * d.iter().map(|x| x * x).sum::<f64>()).sqrt();
+    if norm == 0.0 {
+        return 1.0;
+    }
+    (n[0] * d[0] + n[1] * d[1] + n[2] * d[2]).abs() / norm
 }
 
 /// How far, in barycentric units, the ray's line passes from the nearest edge of `tri`

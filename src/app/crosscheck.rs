@@ -143,7 +143,7 @@ impl fmt::Display for CrosscheckReport {
         )?;
         writeln!(
             f,
-            "  max relative t difference on agreeing hits {:.2e}",
+            "  max relative t difference on agreeing hits, times |cos incidence| {:.2e}",
             r.max_rel_dt
         )?;
         writeln!(
