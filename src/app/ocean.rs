@@ -97,7 +97,8 @@ impl fmt::Display for OceanReport {
         )?;
         writeln!(
             f,
-            "  layer   size (m)     n   spacing (m)   band k (rad/m)      spectrum RMS   realization RMS"
+            "  layer   size (m)     n   spacing (m)   band k (rad/m)      spectrum RMS   realization RMS   ({} layering)",
+            p.layering
         )?;
         for (i, l) in s.layers.iter().enumerate() {
             writeln!(

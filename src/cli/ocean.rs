@@ -24,6 +24,13 @@ pub struct OceanArgs {
     /// Layers as SIZE_M:N pairs, coarsest first, e.g. 400:512,47.3:512,5.83:256.
     #[arg(long, value_parser = parse_layers)]
     layers: Option<Layers>,
+    /// How the layers share the wavenumbers: overlap (each band in several layers, so the sum
+    /// does not tile) or disjoint (each layer its own band; the scheme before issue 17).
+    #[arg(long, value_parser = super::choice::<vastocean::ocean::Layering>(), default_value_t = OceanParams::default().layering)]
+    layering: vastocean::ocean::Layering,
+    /// Cap Mitsuyasu's spreading exponent (Goda: 10 wind sea, 25/75 short/long-travelled swell).
+    #[arg(long)]
+    spreading_cap: Option<f64>,
     /// Horizontal displacement scale (paper eq. 3's f_d with the crest-sharpening sign); 0 =
     /// pure height field.
     #[arg(long, default_value_t = OceanParams::default().choppiness)]
@@ -99,6 +106,8 @@ impl OceanArgs {
                 choppiness: self.choppiness,
                 time_s: self.time,
                 layers: self.layers.clone().map_or(defaults.layers.clone(), |l| l.0),
+                layering: self.layering,
+                spreading_cap: self.spreading_cap,
                 ..defaults
             },
             seed: self.seed,

@@ -27,6 +27,12 @@ pub struct SceneFlags {
     /// Scale the ocean to this RMS wave height, m.
     #[arg(long)]
     rms: Option<f64>,
+    /// How the ocean's layers share the wavenumbers (README "The ocean").
+    #[arg(long, value_parser = choice::<vastocean::ocean::Layering>())]
+    layering: Option<vastocean::ocean::Layering>,
+    /// Cap Mitsuyasu's spreading exponent (Goda: 10 wind sea, 25/75 short/long-travelled swell).
+    #[arg(long)]
+    spreading_cap: Option<f64>,
     /// Equirectangular EXR sky map (instead of the built-in analytic sky).
     #[arg(long)]
     sky: Option<PathBuf>,
@@ -67,6 +73,8 @@ impl SceneFlags {
         set(&mut s.ocean.depth_m, self.depth);
         set(&mut s.camera.height_m, self.camera_height);
         s.ocean.rms_m = self.rms.or(s.ocean.rms_m);
+        s.ocean.layering = self.layering.unwrap_or(s.ocean.layering);
+        s.ocean.spreading_cap = self.spreading_cap.or(s.ocean.spreading_cap);
         s.sky.file = self.sky.clone().or(s.sky.file);
         s.camera.width = self.width.unwrap_or(s.camera.width);
         s.render.spp = self.spp.unwrap_or(s.render.spp);

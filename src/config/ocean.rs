@@ -58,6 +58,23 @@ pub enum Interp {
 
 super::choice!(Interp { Bilinear => "bilinear", Bicubic => "bicubic" });
 
+/// How the layers share the spectrum's wavenumbers (see [`OceanParams::partition`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Layering {
+    /// Every wavenumber's energy is shared by all the layers that resolve it, with weights that
+    /// sum to one (a smooth partition of unity in log |k|), so a wave band lives in several
+    /// layers of unrelated periods and the sum does not repeat at any one of them.
+    #[default]
+    Overlap,
+    /// Each layer holds its own band, which ends at half its Nyquist wavenumber where the next
+    /// begins (the scheme before issue 17; every wave longer than the second layer's band
+    /// repeats with the coarsest layer's period).
+    Disjoint,
+}
+
+super::choice!(Layering { Overlap => "overlap", Disjoint => "disjoint" });
+
 /// One FFT realization: an `n` x `n` grid over a periodic `size_m` x `size_m` square.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -92,8 +109,14 @@ pub struct OceanParams {
     pub choppiness: f64,
     pub spectrum: SpectrumKind,
     pub spreading: SpreadingKind,
-    /// Coarsest first; each layer takes the wavenumber band above the previous one's.
+    /// Largest Mitsuyasu spreading exponent s (cos^2s); none = the formula as published. Goda's
+    /// values: 10 for wind waves, 25 and 75 for short- and long-travelled swell.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spreading_cap: Option<f64>,
+    /// Coarsest first.
     pub layers: Vec<LayerSpec>,
+    /// How the layers share the wavenumbers.
+    pub layering: Layering,
     /// Time t of eq. 2, s.
     pub time_s: f64,
     pub interp: Interp,
@@ -111,15 +134,23 @@ impl Default for OceanParams {
             choppiness: 1.0,
             spectrum: SpectrumKind::Tma,
             spreading: SpreadingKind::Mitsuyasu,
-            // Extents in non-integer ratios (8.46, 8.11) so the sum does not repeat for
-            // hundreds of km; 5.83 m / 256 = 2.3 cm spacing for 3 cm triangles near the camera.
+            spreading_cap: None,
+            // Overlapping layers (see `partition`). The two 2048-texel layers of 12.7 and 10.3 km
+            // (ratio 1.233) carry the spectral peak of case 22 (54 m) with 8-10 texels per
+            // wavelength and periods beyond the 10 km the repeat metric looks at; 41.9 m takes
+            // over from 21 m waves down (2 of its fundamentals), 5.83 m / 256 = 2.3 cm spacing for 3 cm triangles near
+            // the camera.
             layers: vec![
                 LayerSpec {
-                    size_m: 400.0,
-                    n: 512,
+                    size_m: 12_700.0,
+                    n: 2048,
                 },
                 LayerSpec {
-                    size_m: 47.3,
+                    size_m: 10_300.0,
+                    n: 2048,
+                },
+                LayerSpec {
+                    size_m: 41.9,
                     n: 512,
                 },
                 LayerSpec {
@@ -127,6 +158,7 @@ impl Default for OceanParams {
                     n: 256,
                 },
             ],
+            layering: Layering::Overlap,
             time_s: 0.0,
             interp: Interp::Bilinear,
         }
@@ -158,6 +190,29 @@ pub const BAND_SPLIT: f64 = 0.5;
 pub const MIN_BAND_START_FUNDAMENTALS: f64 = 2.0;
 
 impl OceanParams {
+    /// The layers before issue 17, kept for comparison: 400 / 47.3 / 5.83 m in disjoint bands
+    /// (every wave longer than ~3 m lives in the 400 m layer, so the sea repeats every 400 m).
+    pub fn tiling_layers() -> OceanParams {
+        OceanParams {
+            layers: vec![
+                LayerSpec {
+                    size_m: 400.0,
+                    n: 512,
+                },
+                LayerSpec {
+                    size_m: 47.3,
+                    n: 512,
+                },
+                LayerSpec {
+                    size_m: 5.83,
+                    n: 256,
+                },
+            ],
+            layering: Layering::Disjoint,
+            ..OceanParams::default()
+        }
+    }
+
     /// Checks every field; the error names the first bad one, e.g.
     /// `ocean.wind_speed must be finite and > 0 (got -1)`.
     pub fn validate(&self) -> Result<(), ConfigError> {
@@ -179,6 +234,16 @@ impl OceanParams {
             ));
         }
         finite("time_s", self.time_s)?;
+        if let Some(cap) = self.spreading_cap {
+            positive("spreading_cap", cap)?;
+            if self.spreading != SpreadingKind::Mitsuyasu {
+                return Err(invalid(
+                    "ocean.spreading_cap",
+                    "set only with spreading = \"mitsuyasu\" (it caps Mitsuyasu's exponent)",
+                    format!("{cap} with spreading = \"{}\"", self.spreading),
+                ));
+            }
+        }
         if self.layers.is_empty() || self.layers.len() > MAX_LAYERS {
             return Err(invalid(
                 "ocean.layers",
@@ -195,7 +260,32 @@ impl OceanParams {
                     l.n,
                 ));
             }
-            if i > 0 {
+            if i > 0 && l.size_m > self.layers[i - 1].size_m {
+                return Err(invalid(
+                    &format!("ocean.layers[{i}].size_m"),
+                    &format!(
+                        "at most the previous layer's {} m (layers go coarsest first)",
+                        self.layers[i - 1].size_m
+                    ),
+                    l.size_m,
+                ));
+            }
+            if i > 0 && self.layering == Layering::Overlap {
+                let reach = (0..i)
+                    .map(|j| overlap_bump(&self.layers, j).hi0)
+                    .fold(0.0, f64::max);
+                let start = overlap_bump(&self.layers, i).lo0;
+                if start >= reach {
+                    return Err(invalid(
+                        &format!("ocean.layers[{i}].size_m"),
+                        &format!(
+                            "small enough that the layers leave no gap in |k|: its band starts at {start:.4} rad/m ({MIN_BAND_START_FUNDAMENTALS} fundamentals), the coarser layers' end at {reach:.4} rad/m"
+                        ),
+                        l.size_m,
+                    ));
+                }
+            }
+            if i > 0 && self.layering == Layering::Disjoint {
                 let kb = band_edge(&self.layers[i - 1]);
                 let lo = MIN_BAND_START_FUNDAMENTALS * std::f64::consts::TAU / kb;
                 // The band [kb, kmax) must span at least a factor 2 in wavenumber; kmax is the
@@ -220,7 +310,41 @@ impl OceanParams {
         Ok(())
     }
 
-    /// Wavenumber bands [k_min, k_max) of the layers, rad/m. They tile one interval: layer 0
+    /// How the layers share the spectrum: layer i's cell at wavevector k gets the fraction
+    /// `partition().weight(i, |k|)` of P(k); the fractions sum to one over the layers at every
+    /// |k| from half the coarsest layer's fundamental to the finest layer's Nyquist wavenumber.
+    ///
+    /// `Overlap`: layer i's raw share is a bump in ln |k| that is 1 from 4 of its fundamentals
+    /// (2 pi / L) up to a quarter of its Nyquist wavenumber (8 texels per wavelength) and falls
+    /// smoothly (smoothstep in ln |k|) to 0 at 2 fundamentals and at half Nyquist (4 texels per
+    /// wavelength, the disjoint scheme's edge). The coarsest layer's bump starts at full height
+    /// at half its fundamental and the finest one's runs at full height to its Nyquist. The
+    /// weights are the bumps divided by their sum, so where k is resolved well by m layers each
+    /// carries 1/m of it. Why: a wave band carried by one layer repeats with that layer's
+    /// period, and the correlation of the summed height at a lag of one period is about the
+    /// share of the variance that layer carries (see `crate::ocean::repeat`).
+    ///
+    /// `Disjoint`: the weights are 1 on [`OceanParams::bands`] and 0 elsewhere.
+    pub fn partition(&self) -> Partition {
+        let bumps = match self.layering {
+            Layering::Overlap => (0..self.layers.len())
+                .map(|i| overlap_bump(&self.layers, i))
+                .collect(),
+            Layering::Disjoint => self
+                .bands()
+                .into_iter()
+                .map(|(lo, hi)| Bump {
+                    lo0: lo,
+                    lo1: lo,
+                    hi1: hi,
+                    hi0: hi,
+                })
+                .collect(),
+        };
+        Partition { bumps }
+    }
+
+    /// Wavenumber bands [k_min, k_max) of the disjoint scheme, rad/m. They tile one interval: layer 0
     /// starts at half its fundamental (the DC cell's edge), each later one where the previous
     /// ends, and the last runs to its Nyquist wavenumber.
     pub fn bands(&self) -> Vec<(f64, f64)> {
@@ -243,6 +367,92 @@ impl OceanParams {
     }
 }
 
+/// One layer's raw share of the wavenumbers: 0 below `lo0`, rising (smoothstep in ln k) to 1 at
+/// `lo1`, 1 up to `hi1`, falling to 0 at `hi0` (an edge with equal ends is a step; the support
+/// is [lo0, hi0)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bump {
+    pub lo0: f64,
+    pub lo1: f64,
+    pub hi1: f64,
+    pub hi0: f64,
+}
+
+impl Bump {
+    pub fn value(&self, k: f64) -> f64 {
+        if !(k >= self.lo0 && k < self.hi0) {
+            return 0.0;
+        }
+        let ramp = |a: f64, b: f64, x: f64| {
+            if x >= b {
+                1.0
+            } else {
+                let t = ((x / a).ln() / (b / a).ln()).clamp(0.0, 1.0);
+                t * t * (3.0 - 2.0 * t)
+            }
+        };
+        let up = ramp(self.lo0, self.lo1, k);
+        let down = if k <= self.hi1 {
+            1.0
+        } else {
+            1.0 - ramp(self.hi1, self.hi0, k)
+        };
+        up.min(down)
+    }
+}
+
+/// The layers' shares of the wavenumbers (see [`OceanParams::partition`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Partition {
+    pub bumps: Vec<Bump>,
+}
+
+impl Partition {
+    /// Fraction of P(k) at |k| = `k` that layer `i` carries.
+    pub fn weight(&self, i: usize, k: f64) -> f64 {
+        let b = self.bumps[i].value(k);
+        if b == 0.0 {
+            return 0.0;
+        }
+        b / self.bumps.iter().map(|x| x.value(k)).sum::<f64>()
+    }
+
+    /// Where layer `i`'s weight can be non-zero, [lo, hi), rad/m.
+    pub fn support(&self, i: usize) -> (f64, f64) {
+        (self.bumps[i].lo0, self.bumps[i].hi0)
+    }
+
+    /// The |k| interval all layers together cover.
+    pub fn covered(&self) -> (f64, f64) {
+        let lo = self
+            .bumps
+            .iter()
+            .map(|b| b.lo0)
+            .fold(f64::INFINITY, f64::min);
+        let hi = self.bumps.iter().map(|b| b.hi0).fold(0.0, f64::max);
+        (lo, hi)
+    }
+}
+
+/// Layer i's bump in the overlap scheme (see [`OceanParams::partition`]).
+fn overlap_bump(layers: &[LayerSpec], i: usize) -> Bump {
+    let l = &layers[i];
+    let fundamental = std::f64::consts::TAU / l.size_m;
+    let (lo0, lo1) = if i == 0 {
+        (0.5 * fundamental, 0.5 * fundamental)
+    } else {
+        let lo0 = MIN_BAND_START_FUNDAMENTALS * fundamental;
+        (lo0, 2.0 * lo0)
+    };
+    let (hi1, hi0) = if i + 1 == layers.len() {
+        (nyquist(l), nyquist(l))
+    } else {
+        let hi0 = BAND_SPLIT * nyquist(l);
+        (0.5 * hi0, hi0)
+    };
+    Bump { lo0, lo1, hi1, hi0 }
+}
+
 pub fn nyquist(l: &LayerSpec) -> f64 {
     std::f64::consts::PI * l.n as f64 / l.size_m
 }
@@ -262,8 +472,43 @@ mod tests {
     }
 
     #[test]
+    fn the_partitions_sum_to_one_and_the_default_overlaps_at_the_peak() {
+        for p in [OceanParams::default(), OceanParams::tiling_layers()] {
+            p.validate().unwrap();
+            let part = p.partition();
+            let (lo, hi) = part.covered();
+            for j in 0..=400 {
+                let k = lo * (hi / lo).powf((j as f64 + 0.5) / 401.0);
+                let w: Vec<f64> = (0..p.layers.len()).map(|i| part.weight(i, k)).collect();
+                let sum: f64 = w.iter().sum();
+                assert!((sum - 1.0).abs() < 1e-12, "{:?} k={k}: {w:?}", p.layering);
+                assert!(w.iter().all(|&x| (0.0..=1.0).contains(&x)));
+            }
+        }
+        // case 22's 54 m peak: half in each of the two long layers, none in the others
+        let part = OceanParams::default().partition();
+        let kp = std::f64::consts::TAU / 54.0;
+        assert!(
+            (part.weight(0, kp) - 0.5).abs() < 1e-12 && (part.weight(1, kp) - 0.5).abs() < 1e-12
+        );
+        // and a gap between layers is refused, naming the layer
+        let mut p = OceanParams::default();
+        p.layers[2].size_m = 20.0;
+        let e = p.validate().unwrap_err().to_string();
+        assert!(
+            e.starts_with(
+                "ocean.layers[2].size_m must be small enough that the layers leave no gap"
+            ),
+            "{e}"
+        );
+        p.layers[2].size_m = 20_000.0;
+        let e = p.validate().unwrap_err().to_string();
+        assert!(e.contains("coarsest first"), "{e}");
+    }
+
+    #[test]
     fn default_is_valid_and_bands_tile() {
-        let p = OceanParams::default();
+        let p = OceanParams::tiling_layers();
         p.validate().unwrap();
         let b = p.bands();
         assert_eq!(b.len(), 3);
@@ -306,14 +551,31 @@ mod tests {
             err_of(|p| p.layers[2].size_m = -5.83)
                 .starts_with("ocean.layers[2].size_m must be finite")
         );
+        let disjoint = |f: fn(&mut OceanParams)| {
+            let mut p = OceanParams::tiling_layers();
+            f(&mut p);
+            p.validate().expect_err("must be rejected").to_string()
+        };
         // a finer layer too small to start its band at the coarser layer's edge
         assert!(
-            err_of(|p| p.layers[1].size_m = 3.0).starts_with("ocean.layers[1].size_m must be in [")
+            disjoint(|p| p.layers[1].size_m = 3.0)
+                .starts_with("ocean.layers[1].size_m must be in [")
         );
         // or so large that its band would be nearly empty
         assert!(
-            err_of(|p| p.layers[2].size_m = 40.0)
+            disjoint(|p| p.layers[2].size_m = 40.0)
                 .starts_with("ocean.layers[2].size_m must be in [")
+        );
+        assert!(
+            err_of(|p| p.spreading_cap = Some(-1.0))
+                .starts_with("ocean.spreading_cap must be finite and > 0")
+        );
+        assert!(
+            err_of(|p| {
+                p.spreading_cap = Some(75.0);
+                p.spreading = SpreadingKind::Cos2;
+            })
+            .starts_with("ocean.spreading_cap must be set only with spreading = \"mitsuyasu\"")
         );
     }
 

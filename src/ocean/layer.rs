@@ -62,6 +62,45 @@ pub type Texel = [f32; FIELD_COUNT];
 
 type C32 = Complex<f32>;
 
+/// Cells closer to k = 0 than this many fundamentals are integrated on at least an 8 x 8
+/// sub-grid: there P (~ k^-3 on the tail) and the overlap weights change within a cell (one
+/// midpoint under-counts a convex P by ~12 % at 2 fundamentals).
+const SUBCELL_RADIUS: f64 = 8.0;
+
+/// Integral of weight(|k|) P(-k) over the cell of side `dk` centred on (kx, kz) (h0(k) is drawn
+/// from P(-k); see the module doc), on a sub-grid fine enough that each sub-cell spans at most
+/// half the spreading's angular width (the paper's cases spread a few degrees, less than a cell
+/// near the peak of a coarse-gridded layer) and 8 x 8 near k = 0.
+fn cell_integral(
+    spectrum: &Spectrum,
+    weight: &(dyn Fn(f64) -> f64 + Sync),
+    kx: f64,
+    kz: f64,
+    dk: f64,
+) -> f64 {
+    let k = kx.hypot(kz);
+    let cell_angle = dk / k;
+    let width = spectrum.spreading_width(spectrum.omega(k));
+    let mut m = (2.0 * cell_angle / width).ceil().clamp(1.0, 16.0) as usize;
+    if k < SUBCELL_RADIUS * dk {
+        m = m.max(8);
+    }
+    if m == 1 {
+        return spectrum.p_k(-kx, -kz) * dk * dk * weight(k);
+    }
+    let sub = dk / m as f64;
+    let centre = 0.5 * (m - 1) as f64;
+    let mut sum = 0.0;
+    for a in 0..m {
+        for b in 0..m {
+            let x = kx + (a as f64 - centre) * sub;
+            let z = kz + (b as f64 - centre) * sub;
+            sum += spectrum.p_k(-x, -z) * weight(x.hypot(z));
+        }
+    }
+    sum * sub * sub
+}
+
 /// One periodic realization: amplitudes, dispersion and the gridded fields at one time.
 pub struct Layer {
     size_m: f64,
@@ -134,6 +173,33 @@ impl Layer {
         seed: u64,
         time_s: f64,
     ) -> Result<Layer, OceanError> {
+        Layer::with_weight(
+            spectrum,
+            size_m,
+            n,
+            band,
+            &|_| 1.0,
+            choppiness,
+            seed,
+            time_s,
+        )
+    }
+
+    /// Like [`Layer::new`], carrying the fraction
+    /// `weight(|k|)` of P(k), which must be 0 outside `band.0 <= |k| < band.1` (the band is
+    /// clipped to the Nyquist disk), with fields at `time_s`. `seed` fully determines the
+    /// amplitudes, whatever the thread count.
+    #[allow(clippy::too_many_arguments)]
+    pub fn with_weight(
+        spectrum: &Spectrum,
+        size_m: f64,
+        n: usize,
+        band: (f64, f64),
+        weight: &(dyn Fn(f64) -> f64 + Sync),
+        choppiness: f64,
+        seed: u64,
+        time_s: f64,
+    ) -> Result<Layer, OceanError> {
         if !size_m.is_finite() || size_m <= 0.0 {
             return Err(OceanError::invalid(
                 "layer size_m",
@@ -183,7 +249,7 @@ impl Layer {
                     if !(k >= band.0 && k < band.1) {
                         continue;
                     }
-                    let cell = spectrum.p_k(-kx, -kz) * dk * dk;
+                    let cell = cell_integral(spectrum, weight, kx, kz, dk);
                     if cell > 0.0 {
                         // E|h0|^2 = P dk^2 / 2, so the sum of E|h~(k)|^2 over k is the variance
                         let a = 0.5 * cell.sqrt();

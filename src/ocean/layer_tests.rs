@@ -224,12 +224,12 @@ fn grid_sum_matches_band_integral() {
     // band integral, on the default 400 m layer where the case-22 peak is only ~1 cell wide
     // radially, and for case 12 whose Mitsuyasu spreading is ~1 cell wide in angle.
     for p in [
-        OceanParams::default(),
+        OceanParams::tiling_layers(),
         OceanParams {
             wind_speed: 1.3,
             fetch_km: 194.8,
             depth_m: 381.4,
-            ..OceanParams::default()
+            ..OceanParams::tiling_layers()
         },
     ] {
         let s = spectrum(&p);

@@ -13,7 +13,7 @@ pub mod spectrum;
 pub mod surface;
 
 pub use crate::config::ocean::{
-    Interp, LayerSpec, MAX_LAYERS, OceanParams, SpectrumKind, SpreadingKind,
+    Interp, LayerSpec, Layering, MAX_LAYERS, OceanParams, Partition, SpectrumKind, SpreadingKind,
 };
 pub use layer::{FIELD_COUNT, Layer, Texel, field, jacobian};
 pub use preview::write_preview_png;

@@ -195,6 +195,8 @@ pub struct Spectrum {
     pub omega_p: f64,
     /// Frequency that sets the low-frequency cut-off exp(-c (omega_c/omega)^4).
     omega_cut: f64,
+    /// Largest Mitsuyasu exponent (`OceanParams::spreading_cap`); infinity = uncapped.
+    pub spreading_cap: f64,
 }
 
 impl Spectrum {
@@ -224,6 +226,7 @@ impl Spectrum {
             alpha,
             omega_p,
             omega_cut,
+            spreading_cap: params.spreading_cap.unwrap_or(f64::INFINITY),
         }
     }
 
@@ -233,7 +236,8 @@ impl Spectrum {
             .then(|| G * self.fetch_m / (self.wind_speed * self.wind_speed))
     }
 
-    /// Mitsuyasu's spreading exponent at the spectral peak (`None` for other spreadings).
+    /// Mitsuyasu's spreading exponent at the spectral peak as published (`None` for other
+    /// spreadings); the surface uses it capped at `spreading_cap`.
     pub fn peak_spreading_exponent(&self) -> Option<f64> {
         (self.spreading == SpreadingKind::Mitsuyasu)
             .then(|| mitsuyasu_s(self.omega_p, self.omega_p, self.wind_speed))
@@ -254,10 +258,10 @@ impl Spectrum {
             ));
         }
         if let Some(s) = self.peak_spreading_exponent()
-            && s > MAX_PEAK_SPREADING
+            && s.min(self.spreading_cap) > MAX_PEAK_SPREADING
         {
             w.push(format!(
-                "Mitsuyasu's spreading exponent at the peak is {s:.0}, above {MAX_PEAK_SPREADING:.0} (Goda's value for long-travelled swell): the waves are nearly unidirectional, long-crested"
+                "Mitsuyasu's spreading exponent at the peak is {s:.0}, above {MAX_PEAK_SPREADING:.0} (Goda's value for long-travelled swell): the waves are nearly unidirectional, long-crested; spreading_cap = {MAX_PEAK_SPREADING:.0} (--spreading-cap) caps it"
             ));
         }
         w
@@ -284,11 +288,30 @@ impl Spectrum {
         }
     }
 
+    /// Angular width of D(theta; omega), radians: the standard deviation of the narrow-spread
+    /// limit (cos^2s ~ exp(-s theta^2 / 4): sqrt(2 / s); sech^2(beta theta): pi / (2 sqrt(3) beta)),
+    /// for choosing how finely a grid cell must be integrated.
+    pub fn spreading_width(&self, omega: f64) -> f64 {
+        match self.spreading {
+            SpreadingKind::Mitsuyasu => {
+                let s = mitsuyasu_s(omega, self.omega_p, self.wind_speed).min(self.spreading_cap);
+                (2.0 / s.max(1e-9)).sqrt().min(PI)
+            }
+            SpreadingKind::DonelanBanner => {
+                let beta = donelan_banner_beta(omega / self.omega_p);
+                (PI / (2.0 * 3f64.sqrt() * beta.max(1e-9))).min(PI)
+            }
+            SpreadingKind::Cos2 => 0.5,
+            SpreadingKind::Uniform => PI,
+        }
+    }
+
     /// Directional spreading D(theta; omega), theta measured from the downwind direction.
     pub fn spreading_at(&self, omega: f64, theta: f64) -> f64 {
         match self.spreading {
             SpreadingKind::Mitsuyasu => {
-                cos_2s(theta, mitsuyasu_s(omega, self.omega_p, self.wind_speed))
+                let s = mitsuyasu_s(omega, self.omega_p, self.wind_speed);
+                cos_2s(theta, s.min(self.spreading_cap))
             }
             SpreadingKind::DonelanBanner => {
                 donelan_banner(theta, donelan_banner_beta(omega / self.omega_p))
@@ -330,13 +353,24 @@ impl Spectrum {
     /// the circle, so this is the integral of S over [omega(k_min), omega(k_max)) (Gauss-Legendre
     /// on panels of 0.005 in ln omega: the JONSWAP peak is ~0.07 wide there).
     pub fn band_variance(&self, k_min: f64, k_max: f64) -> f64 {
+        self.weighted_variance(k_min, k_max, |_| 1.0)
+    }
+
+    /// Integral of weight(|k|) P(k) over the annulus k_min <= |k| < k_max, m^2 (a layer's share
+    /// under `OceanParams::partition`).
+    pub fn weighted_variance(&self, k_min: f64, k_max: f64, weight: impl Fn(f64) -> f64) -> f64 {
         let lo = self.omega(k_min).max(0.05 * self.omega_cut);
         // above 1e4 omega_p the omega^-5 tail holds 1e-16 of the variance
         let hi = self.omega(k_max).min(1e4 * self.omega_p);
         if hi.is_nan() || lo.is_nan() || hi <= lo {
             return 0.0;
         }
-        integrate_log(|w| self.s_omega(w), lo, hi, 0.005)
+        integrate_log(
+            |w| self.s_omega(w) * weight(wavenumber(w, self.depth_m)),
+            lo,
+            hi,
+            0.005,
+        )
     }
 
     /// Variance of the whole spectrum, m^2.

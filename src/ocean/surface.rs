@@ -1,5 +1,6 @@
 //! The ocean surface as the sum of layers with non-integer-ratio extents (paper eqs. 5-6), each
-//! holding its own band of |k| so no energy is counted twice, and its evaluation at any nominal
+//! holding its share of every |k| (`OceanParams::partition`: shares sum to one, so no energy
+//! is counted twice), and its evaluation at any nominal
 //! position x: the surface point X(x, t) = x + D + y h (eq. 4), the normal of eq. 7 from the
 //! summed FFT gradients, and the Jacobian J of the horizontal map x -> x + D, which is <= 0 where
 //! choppiness folds the surface over itself (Tessendorf 2001, "choppy waves").
@@ -128,10 +129,10 @@ pub struct LayerSummary {
     pub size_m: f64,
     pub n: usize,
     pub spacing_m: f64,
-    /// Band [k_min, k_max), rad/m.
+    /// Where the layer's share of the wavenumbers is non-zero, [k_min, k_max), rad/m.
     pub k_min: f64,
     pub k_max: f64,
-    /// sqrt of the integral of the (scaled) spectrum over the band, m.
+    /// sqrt of the integral of the layer's share of the (scaled) spectrum, m.
     pub spectrum_rms_m: f64,
     pub realization_rms_m: f64,
     /// Where this layer alone folds.
@@ -151,7 +152,8 @@ pub struct OceanSummary {
     pub model_rms_m: f64,
     /// sqrt of the integral of P over the union of the layers' bands, times the amplitude scale.
     pub spectrum_rms_m: f64,
-    /// sqrt of the sum of the layers' grid variances at `time_s` (the bands are disjoint).
+    /// sqrt of the sum of the layers' grid variances at `time_s` (independent layers: the
+    /// variance of their sum, in expectation).
     pub realization_rms_m: f64,
     /// RMS of the summed, interpolated surface on a jittered grid over the coarsest period.
     pub sampled_rms_m: f64,
@@ -177,18 +179,18 @@ impl Surface {
         params.validate()?;
         let start = Instant::now();
         let spectrum = Spectrum::new(params);
-        let bands = params.bands();
+        let partition = params.partition();
         let mut layers = params
             .layers
             .par_iter()
-            .zip(bands)
             .enumerate()
-            .map(|(i, (l, band))| {
-                Layer::new(
+            .map(|(i, l)| {
+                Layer::with_weight(
                     &spectrum,
                     l.size_m,
                     l.n,
-                    band,
+                    partition.support(i),
+                    &|k| partition.weight(i, k),
                     params.choppiness,
                     layer_seed(seed, i),
                     params.time_s,
@@ -327,15 +329,16 @@ impl Surface {
 
     /// Generation statistics (see [`OceanSummary`]).
     pub fn summary(&self) -> OceanSummary {
+        let partition = self.params.partition();
         let layers: Vec<LayerSummary> = self
             .layers
             .iter()
-            .map(|l| {
+            .enumerate()
+            .map(|(i, l)| {
                 let (k_min, k_max) = l.band();
-                let band_var = self
-                    .spectrum
-                    .as_ref()
-                    .map_or(0.0, |s| s.band_variance(k_min, k_max));
+                let band_var = self.spectrum.as_ref().map_or(0.0, |s| {
+                    s.weighted_variance(k_min, k_max, |k| partition.weight(i, k))
+                });
                 LayerSummary {
                     size_m: l.size_m(),
                     n: l.n(),

@@ -123,11 +123,69 @@ fn sampler_matches_direct_sum_of_layers() {
 }
 
 #[test]
+fn summed_layers_carry_the_spectrum_of_the_covered_band_in_both_schemes() {
+    // The expected variance of the sum (the cell integrals of each layer's share of P) against
+    // the spectrum's integral over the |k| interval the layers cover: the partition counts
+    // every wavenumber once, whether the layers overlap or not.
+    for base in [OceanParams::default(), OceanParams::tiling_layers()] {
+        for (wind_speed, fetch_km, depth_m) in [(4.16, 204.5, 997.9), (1.78, 141.35, 263.4)] {
+            let p = OceanParams {
+                wind_speed,
+                fetch_km,
+                depth_m,
+                rms_m: None,
+                ..base.clone()
+            };
+            let s = Surface::new(&p, 3).unwrap();
+            let sum: f64 = s.layers().iter().map(|l| l.expected_variance()).sum();
+            let (lo, hi) = p.partition().covered();
+            let integral = Spectrum::new(&p).band_variance(lo, hi);
+            println!(
+                "{:?} U={wind_speed}: sum / integral = {:.5}",
+                p.layering,
+                sum / integral
+            );
+            assert!(
+                (sum / integral - 1.0).abs() < 0.01,
+                "{:?}: {sum} vs {integral}",
+                p.layering
+            );
+            // and the summary's per-layer spectrum shares add up to the same integral
+            let shares: f64 = s
+                .summary()
+                .layers
+                .iter()
+                .map(|l| l.spectrum_rms_m.powi(2))
+                .sum();
+            assert!(
+                (shares / integral - 1.0).abs() < 1e-3,
+                "{shares} vs {integral}"
+            );
+        }
+    }
+}
+
+#[test]
 fn target_rms_is_hit() {
-    for (seed, target) in [(4, 0.225), (5, 0.548), (6, 0.098)] {
+    // The layers before issue 17 (fine grids): the interpolated surface has the target RMS.
+    // With the default overlapping layers the realization does too, but bilinear reads of the
+    // 10.3 and 12.7 km layers (8-10 texels per peak wavelength) lose ~5 % of it between texels
+    // (README "The ocean").
+    for (base, sampled_tolerance) in [
+        (OceanParams::tiling_layers(), 0.01),
+        (OceanParams::default(), 0.06),
+    ] {
+        for (seed, target) in [(4, 0.225), (5, 0.548), (6, 0.098)] {
+            target_rms_case(&base, seed, target, sampled_tolerance);
+        }
+    }
+}
+
+fn target_rms_case(base: &OceanParams, seed: u64, target: f64, sampled_tolerance: f64) {
+    {
         let p = OceanParams {
             rms_m: Some(target),
-            ..OceanParams::default()
+            ..base.clone()
         };
         let s = Surface::new(&p, seed).unwrap();
         let sum = s.summary();
@@ -137,7 +195,7 @@ fn target_rms_is_hit() {
         );
         // the summed, interpolated surface measured independently of Parseval
         assert!(
-            (sum.sampled_rms_m / target - 1.0).abs() < 0.01,
+            (sum.sampled_rms_m / target - 1.0).abs() < sampled_tolerance,
             "sampled {} vs {target}",
             sum.sampled_rms_m
         );
