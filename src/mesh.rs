@@ -135,6 +135,32 @@ impl Mesh {
     /// its padding stay, so a BVH sharing the buffer can be refitted). Checked first: on a
     /// wrong count or a non-finite position nothing changes.
     pub fn set_positions(&mut self, new: &[[f32; 3]]) -> Result<(), MeshError> {
+        self.check_positions(new)?;
+        self.positions.0.copy_from_slice(new);
+        Ok(())
+    }
+
+    /// Replaces positions and vertex normals together (an animation frame); checked first as
+    /// [`Mesh::set_positions`], and the normals must match in count.
+    pub fn set_vertices(
+        &mut self,
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+    ) -> Result<(), MeshError> {
+        self.check_positions(positions)?;
+        if normals.len() != self.normals.len() {
+            return Err(MeshError::LengthMismatch {
+                positions: self.positions.len(),
+                what: "new normals",
+                len: normals.len(),
+            });
+        }
+        self.positions.0.copy_from_slice(positions);
+        self.normals.copy_from_slice(normals);
+        Ok(())
+    }
+
+    fn check_positions(&self, new: &[[f32; 3]]) -> Result<(), MeshError> {
         if new.len() != self.positions.len() {
             return Err(MeshError::LengthMismatch {
                 positions: self.positions.len(),
@@ -148,7 +174,6 @@ impl Mesh {
                 value: new[index],
             });
         }
-        self.positions.0.copy_from_slice(new);
         Ok(())
     }
     pub fn normals(&self) -> &[[f32; 3]] {

@@ -6,6 +6,7 @@ mod common;
 mod defects;
 #[cfg(feature = "embree")]
 mod embree;
+mod frames;
 mod lod;
 mod passes;
 mod render;

@@ -379,9 +379,24 @@ impl Scene {
     /// otherwise. Returns the seconds Embree took. Fails without touching anything when
     /// something else still holds the scene's mesh or the positions are invalid.
     pub fn refit(&mut self, positions: &[[f32; 3]]) -> Result<f64, EmbreeError> {
+        self.refit_with(|m| m.set_positions(positions))
+    }
+
+    /// As [`Scene::refit`], moving the vertex normals too (an animation frame).
+    pub fn refit_vertices(
+        &mut self,
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+    ) -> Result<f64, EmbreeError> {
+        self.refit_with(|m| m.set_vertices(positions, normals))
+    }
+
+    fn refit_with(
+        &mut self,
+        update: impl FnOnce(&mut Mesh) -> Result<(), crate::mesh::MeshError>,
+    ) -> Result<f64, EmbreeError> {
         let mesh = Arc::get_mut(&mut self.mesh).ok_or(EmbreeError::Shared)?;
-        mesh.set_positions(positions)
-            .map_err(|e| EmbreeError::Mesh(e.to_string()))?;
+        update(mesh).map_err(|e| EmbreeError::Mesh(e.to_string()))?;
         let _building = self
             .device
             .building
@@ -518,6 +533,15 @@ impl Accel for Scene {
 
     fn bytes(&self) -> u64 {
         self.bytes
+    }
+
+    fn update_vertices(
+        &mut self,
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+    ) -> Result<f64, String> {
+        self.refit_vertices(positions, normals)
+            .map_err(|e| e.to_string())
     }
 
     fn take_error(&self) -> Option<String> {

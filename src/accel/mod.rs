@@ -97,6 +97,20 @@ pub trait Accel: Send + Sync {
     }
     /// Bytes of the acceleration structure (not counting the mesh it shares).
     fn bytes(&self) -> u64;
+    /// Moves the mesh's vertices and vertex normals (same topology: an animation frame) and
+    /// updates the structure over them (Embree refits its BVH when built with refit quality;
+    /// the Rust BVH refits its bounds). Returns the seconds the structure's update took. Fails,
+    /// changing nothing, when the vertices are invalid or another owner shares the mesh.
+    fn update_vertices(
+        &mut self,
+        _positions: &[[f32; 3]],
+        _normals: &[[f32; 3]],
+    ) -> Result<f64, String> {
+        Err(format!(
+            "the {} backend cannot move its vertices",
+            self.name()
+        ))
+    }
     /// An error the backend reported while tracing, if any, clearing it (Embree's device
     /// errors are not checked per ray, only here and on setup calls).
     fn take_error(&self) -> Option<String> {

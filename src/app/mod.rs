@@ -10,6 +10,7 @@ pub mod bench;
 pub mod compare;
 #[cfg(feature = "embree")]
 pub mod crosscheck;
+pub mod frames;
 pub mod info;
 pub mod mesh;
 pub mod ocean;

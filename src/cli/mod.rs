@@ -94,7 +94,10 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Info { threads, json } => emit(&app::info::run(threads)?, json),
         Command::Bench(c) => bench::run(c),
-        Command::Render(a) => emit(&app::render::run(&a.job()?)?, a.json),
+        Command::Render(a) => match a.frames {
+            Some(frames) => emit(&app::frames::run(&a.frames_job(frames)?)?, a.json),
+            None => emit(&app::render::run(&a.job()?)?, a.json),
+        },
         Command::Merge(a) => emit(&app::passes::Merged(app::passes::merge(&a.job())?), a.json),
         Command::Compare(a) => emit(&app::compare::run(&a.job()?)?, a.json),
         #[cfg(feature = "embree")]

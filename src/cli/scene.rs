@@ -120,8 +120,13 @@ pub struct RenderArgs {
     /// Render only pass K of N (1-based: the samples s = K-1 mod N of every pixel) into
     /// PREFIX.pass; `vastocean merge` adds the passes up into the render (README "Rendering on
     /// many machines").
-    #[arg(long, value_parser = vastocean::app::passes::parse_pass)]
+    #[arg(long, value_parser = vastocean::app::passes::parse_pass, conflicts_with = "frames")]
     pass: Option<(usize, usize)>,
+    /// Render an animation: ocean times START:END:STEP in seconds (e.g. 0:2:0.04), into
+    /// PREFIX.0001.exr/.png ... and one PREFIX.json for the sequence; each frame after the first
+    /// moves the vertices and refits the BVH instead of rebuilding (README "Animation").
+    #[arg(long, value_parser = vastocean::app::frames::parse_frames)]
+    pub frames: Option<vastocean::app::frames::FrameRange>,
     /// Print the JSON sidecar on stdout.
     #[arg(long)]
     pub json: bool,
@@ -151,6 +156,17 @@ impl MergeArgs {
 }
 
 impl RenderArgs {
+    /// The animation job of `--frames`.
+    pub fn frames_job(&self, frames: app::frames::FrameRange) -> Result<app::frames::FramesJob> {
+        let r = self.job()?;
+        Ok(app::frames::FramesJob {
+            scene: r.scene,
+            out: r.out,
+            progress: r.progress,
+            frames,
+        })
+    }
+
     pub fn job(&self) -> Result<app::render::RenderJob> {
         let mut cfg = self.scene.scene()?;
         cfg.lod.preset = self.lod.unwrap_or(cfg.lod.preset);

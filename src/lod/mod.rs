@@ -343,6 +343,25 @@ pub fn tessellate(params: &LodParams, sampler: &Sampler) -> Result<(Mesh, LodSta
     Ok((mesh, stats))
 }
 
+/// The displaced position and normal of every vertex from its nominal position (texture
+/// coordinate) `uvs`, as [`tessellate`] computes them: for an animation frame, whose topology
+/// is the first frame's and whose surface has moved on in time. Bit-identical to a fresh
+/// tessellation of the same surface.
+pub fn displace(
+    uvs: &[[f32; 2]],
+    sampler: &Sampler,
+    earth_radius_m: f64,
+) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
+    use rayon::prelude::*;
+    uvs.par_iter()
+        .map(|&[u, w]| {
+            let sample = sampler.sample(u, w);
+            let (p, n) = curved_frame_point(u as f64, w as f64, &sample, earth_radius_m);
+            (p.map(|c| c as f32), n.map(|c| c as f32))
+        })
+        .unzip()
+}
+
 /// The exact number of triangles [`tessellate`] would build, without building anything.
 /// Panics if `params` is invalid (see [`LodParams::validate`]).
 pub fn count_triangles(params: &LodParams) -> usize {

@@ -160,18 +160,19 @@ pub fn tilt_to_earth(u: f32, v: f32, earth_radius_m: f64, n: Vec3) -> Vec3 {
 /// below one triangle is below its neighbours too (two faces sloping opposite ways would need
 /// gradients whose dot product is below -1 to put it above one of them).
 pub fn max_descent_slope(mesh: &Mesh) -> Option<f32> {
-    let mut worst = 0f32;
-    for prim in 0..mesh.triangle_count() as u32 {
-        let [a, b, c] = mesh.triangle(prim).map(Vec3::from);
-        let n = (b - a).cross(c - a);
-        if n == Vec3::ZERO {
-            continue; // degenerate: no area to hit
-        }
-        if n.y <= 0.0 {
-            return None;
-        }
-        worst = worst.max((n.x * n.x + n.z * n.z).sqrt() / n.y);
-    }
+    use rayon::prelude::*;
+    // per triangle: Some(slope), or None for one facing sideways or down
+    let worst = (0..mesh.triangle_count() as u32)
+        .into_par_iter()
+        .map(|prim| {
+            let [a, b, c] = mesh.triangle(prim).map(Vec3::from);
+            let n = (b - a).cross(c - a);
+            if n == Vec3::ZERO {
+                return Some(0.0); // degenerate: no area to hit
+            }
+            (n.y > 0.0).then(|| (n.x * n.x + n.z * n.z).sqrt() / n.y)
+        })
+        .try_reduce(|| 0f32, |a, b| Some(a.max(b)))?;
     (worst < 1.0).then_some(worst)
 }
 

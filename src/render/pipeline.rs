@@ -63,6 +63,11 @@ pub enum RenderError {
         triangles: u64,
         available: u64,
     },
+    #[error("the {backend} backend could not move the mesh to the next frame: {message}")]
+    Refit {
+        backend: &'static str,
+        message: String,
+    },
     #[error("the {backend} backend reported an error while tracing: {message}")]
     Trace {
         backend: &'static str,
@@ -248,6 +253,16 @@ pub struct Prepared {
 
 /// Builds the ocean, the tessellation and the BVH of a validated scene.
 pub fn prepare(cfg: &SceneConfig) -> Result<Prepared, RenderError> {
+    prepare_built(cfg, false)
+}
+
+/// As [`prepare`], for an animation: Embree builds a BVH it can refit
+/// ([`Prepared::advance_to`] moves the scene to another time).
+pub fn prepare_for_frames(cfg: &SceneConfig) -> Result<Prepared, RenderError> {
+    prepare_built(cfg, true)
+}
+
+fn prepare_built(cfg: &SceneConfig, refittable: bool) -> Result<Prepared, RenderError> {
     cfg.validate()?;
     let lod = crate::lod::params_for(&cfg.lod, &cfg.camera)?;
     check_memory(
@@ -290,7 +305,15 @@ pub fn prepare(cfg: &SceneConfig) -> Result<Prepared, RenderError> {
             #[cfg(feature = "embree")]
             Backend::Embree => {
                 let device = Device::new(threads)?;
-                let scene = Scene::new(&device, mesh, BuildOptions::default())?;
+                let options = BuildOptions {
+                    quality: if refittable {
+                        crate::accel::embree::Quality::Refit
+                    } else {
+                        BuildOptions::default().quality
+                    },
+                    ..BuildOptions::default()
+                };
+                let scene = Scene::new(&device, mesh, options)?;
                 let s = scene.build_seconds();
                 (Box::new(scene), s, Some(device.version()))
             }
@@ -317,6 +340,71 @@ pub fn prepare(cfg: &SceneConfig) -> Result<Prepared, RenderError> {
         pool,
         camera_position_m: cfg.camera.position_m,
     })
+}
+
+/// What moving a prepared scene to another ocean time cost, seconds.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
+pub struct FrameUpdate {
+    /// The layers' fields at the new time (eq. 2 and the FFTs).
+    pub seconds_ocean: f64,
+    /// Every vertex's position and normal from its texture coordinate, and the mesh's
+    /// steepest slope (which the ray skipping needs).
+    pub seconds_geometry: f64,
+    /// The BVH's update over the moved vertices (Embree's refit, the Rust BVH's bounds).
+    pub seconds_refit: f64,
+}
+
+impl Prepared {
+    /// Moves the ocean to `time_s` and the mesh with it: the tessellation's topology stays
+    /// (it depends on the camera only), every vertex is displaced anew from its texture
+    /// coordinate and the BVH is refitted. Refuses, as [`prepare`] does, a sea that folds too
+    /// much or stands above the camera at that time.
+    pub fn advance_to(
+        &mut self,
+        time_s: f64,
+        camera_height_m: f64,
+    ) -> Result<FrameUpdate, RenderError> {
+        let t = Instant::now();
+        let ocean = &mut self.ocean;
+        self.pool.install(|| ocean.set_time(time_s))?;
+        let seconds_ocean = t.elapsed().as_secs_f64();
+        let folded = self.ocean.summary().folded_fraction;
+        if folded > MAX_FOLDED_FRACTION {
+            return Err(RenderError::Folded {
+                folded,
+                choppiness: self.ocean.params().choppiness,
+            });
+        }
+        let sampler = self.ocean.sampler(self.camera_position_m);
+        let surface_m = surface_height_at_nadir(&sampler);
+        if camera_height_m <= surface_m {
+            return Err(RenderError::CameraUnderwater {
+                camera_m: camera_height_m,
+                surface_m,
+            });
+        }
+        let t = Instant::now();
+        let earth_r = self.lod.earth_radius_m;
+        let (positions, normals) = self
+            .pool
+            .install(|| crate::lod::displace(self.accel.mesh().uvs(), &sampler, earth_r));
+        let accel = &mut self.accel;
+        let seconds_refit = self
+            .pool
+            .install(|| accel.update_vertices(&positions, &normals))
+            .map_err(|message| RenderError::Refit {
+                backend: self.accel.name(),
+                message,
+            })?;
+        drop((positions, normals));
+        self.skip_slope = max_descent_slope(self.accel.mesh());
+        let seconds_geometry = t.elapsed().as_secs_f64() - seconds_refit;
+        Ok(FrameUpdate {
+            seconds_ocean,
+            seconds_geometry,
+            seconds_refit,
+        })
+    }
 }
 
 /// Deepest trough counted on, in RMS heights: a Gaussian sea goes below -5 sigma at about one

@@ -67,6 +67,29 @@ impl Bvh {
         self.build_seconds
     }
 
+    /// Moves the mesh's vertices and normals (same topology: an animation frame) and refits
+    /// the bounds bottom-up, keeping the tree: the leaves' triangle copies are refreshed and
+    /// every node's box becomes the union of its children's. Returns the seconds the refit
+    /// took (not the vertex copy). The tree's quality degrades as the vertices wander from
+    /// where the SAH placed them; an ocean's vertices move by metres on a tree whose boxes
+    /// span kilometres near the top, so it stays good. Fails, changing nothing, when another
+    /// owner shares the mesh or the vertices are invalid.
+    pub fn refit(&mut self, positions: &[[f32; 3]], normals: &[[f32; 3]]) -> Result<f64, String> {
+        use rayon::prelude::*;
+        let mesh = Arc::get_mut(&mut self.mesh)
+            .ok_or("the mesh is shared with another owner; it cannot move")?;
+        mesh.set_vertices(positions, normals)
+            .map_err(|e| e.to_string())?;
+        let start = Instant::now();
+        let mesh = &self.mesh;
+        self.tris
+            .par_iter_mut()
+            .zip(&self.prims)
+            .for_each(|(t, &p)| *t = mesh.triangle(p));
+        refit_node(&mut self.nodes, &self.tris, 0);
+        Ok(start.elapsed().as_secs_f64())
+    }
+
     /// Bytes of the built structure: nodes, triangles copied into leaf order, and their ids.
     pub fn bytes(&self) -> usize {
         std::mem::size_of_val(self.nodes.as_slice())
@@ -151,6 +174,25 @@ impl Bvh {
     }
 }
 
+/// Recomputes the bounds of node `i` and everything under it; returns its box.
+fn refit_node(nodes: &mut [Pair], tris: &[[[f32; 3]; 3]], i: usize) -> layout::Aabb {
+    let n = nodes[i / 2].0[i % 2];
+    let mut b = layout::Aabb::EMPTY;
+    if n.count == 0 {
+        let c = n.index as usize;
+        b.join(&refit_node(nodes, tris, c));
+        b.join(&refit_node(nodes, tris, c + 1));
+    } else {
+        for t in &tris[n.index as usize..(n.index + n.count) as usize] {
+            t.iter().for_each(|&v| b.grow(v));
+        }
+    }
+    let node = &mut nodes[i / 2].0[i % 2];
+    node.lo = b.lo;
+    node.hi = b.hi;
+    b
+}
+
 impl Accel for Bvh {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
         if !self.admit(ray) {
@@ -173,6 +215,14 @@ impl Accel for Bvh {
 
     fn bytes(&self) -> u64 {
         Bvh::bytes(self) as u64
+    }
+
+    fn update_vertices(
+        &mut self,
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+    ) -> Result<f64, String> {
+        self.refit(positions, normals)
     }
 }
 
