@@ -59,7 +59,7 @@ fn run_pass(job: &RenderJob, k: usize, n: usize) -> Result<RenderReport, AppErro
         passes: n,
     };
     let prepared = prepare(&job.scene)?;
-    let (r, states) = prepared.render_samples(&job.scene, 0, samples, job.progress)?;
+    let (r, states) = prepared.render_samples(&job.scene, 0, samples, true, job.progress)?;
     let mut report = r.report;
     let spp = super::passes::pass_samples(k, n, job.scene.render.spp);
     report.spp = spp;

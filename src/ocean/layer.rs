@@ -111,8 +111,9 @@ pub struct Layer {
     time_s: f64,
     /// h0(k), kx-major (index ix * n + iz), zero outside the band.
     h0: Vec<C32>,
-    /// omega(|k|), same layout.
-    omega: Vec<f64>,
+    /// Water depth for the dispersion relation: omega(|k|) is computed where h0 is non-zero
+    /// rather than stored (64 MB for a 2048-texel layer).
+    depth_m: f64,
     expected_variance: f64,
     /// Texels, z-major (index iz * n + ix); texel (ix, iz) is at (ix L/n, iz L/n).
     fields: Vec<Texel>,
@@ -227,7 +228,7 @@ impl Layer {
         let half = n / 2;
         let signed = move |i: usize| signed_index(i, n);
         let seed = splitmix64(seed);
-        let rows: Vec<(Vec<C32>, Vec<f64>, f64)> = (0..n)
+        let rows: Vec<(Vec<C32>, f64)> = (0..n)
             .into_par_iter()
             .map(|ix| {
                 // one stream per row keeps the draw independent of scheduling
@@ -235,13 +236,11 @@ impl Layer {
                 rng.set_stream(ix as u64);
                 let kx = signed(ix) * dk;
                 let mut h0 = vec![C32::default(); n];
-                let mut omega = vec![0.0; n];
                 let mut var = 0.0;
-                for iz in 0..n {
+                for (iz, slot) in h0.iter_mut().enumerate() {
                     let (g1, g2) = gauss_pair(&mut rng);
                     let kz = signed(iz) * dk;
                     let k = kx.hypot(kz);
-                    omega[iz] = spectrum.omega(k);
                     // the Nyquist row and column pair with themselves; DC has no direction
                     if ix == half || iz == half || (ix == 0 && iz == 0) {
                         continue;
@@ -253,19 +252,17 @@ impl Layer {
                     if cell > 0.0 {
                         // E|h0|^2 = P dk^2 / 2, so the sum of E|h~(k)|^2 over k is the variance
                         let a = 0.5 * cell.sqrt();
-                        h0[iz] = C32::new((a * g1) as f32, (a * g2) as f32);
+                        *slot = C32::new((a * g1) as f32, (a * g2) as f32);
                         var += cell;
                     }
                 }
-                (h0, omega, var)
+                (h0, var)
             })
             .collect();
         let mut h0 = Vec::with_capacity(n * n);
-        let mut omega = Vec::with_capacity(n * n);
         let mut expected_variance = 0.0;
-        for (h, w, v) in rows {
+        for (h, v) in rows {
             h0.extend_from_slice(&h);
-            omega.extend_from_slice(&w);
             expected_variance += v;
         }
         let fft = FftPlanner::<f32>::new().plan_fft_inverse(n);
@@ -277,7 +274,7 @@ impl Layer {
             choppiness,
             time_s,
             h0,
-            omega,
+            depth_m: spectrum.depth_m,
             expected_variance,
             fields: vec![[0.0; FIELD_COUNT]; n * n],
             fft,
@@ -356,7 +353,10 @@ impl Layer {
         if a == C32::default() && b == C32::default() {
             return Complex::default();
         }
-        let (s, c) = (self.omega[i] * t).rem_euclid(TAU).sin_cos();
+        let dk = TAU / self.size_m;
+        let k = (signed_index(ix, n) * dk).hypot(signed_index(iz, n) * dk);
+        let omega = super::spectrum::dispersion(k, self.depth_m);
+        let (s, c) = (omega * t).rem_euclid(TAU).sin_cos();
         let e = Complex::new(c, s);
         let a = Complex::new(a.re as f64, a.im as f64);
         let b = Complex::new(b.re as f64, -(b.im as f64));

@@ -74,9 +74,14 @@ impl Film {
 
 /// Bytes a film of `pixels` pixels takes while it renders and is written: the per-pixel sums,
 /// the image, its variance, `batches` batch means, and the copies the EXR and PNG writers make.
-pub fn film_bytes(pixels: u64, batches: usize) -> u64 {
-    let per_pixel = 2 * std::mem::size_of::<PixelState>() // the rows' states, then the film's
-        + 12 + 4 + 8 * batches // image, variance, batch means (the rows', then the film's)
+pub fn film_bytes(pixels: u64, batches: usize, keep_states: bool) -> u64 {
+    let states = if keep_states {
+        2 * std::mem::size_of::<PixelState>() // the rows' states, then the pass file's
+    } else {
+        0
+    };
+    let per_pixel = states
+        + 2 * (12 + 4 + 4 * batches) // image, variance, batch means: the rows', then the film's
         + 16 + 3; // EXR channels (R, G, B, Y.variance), PNG bytes
     pixels * per_pixel as u64
 }
@@ -234,6 +239,7 @@ pub fn render_image(
         settings,
         batches,
         Samples::ALL,
+        false,
         progress,
     );
     (film, c)
@@ -251,6 +257,7 @@ pub fn render_image_samples(
     settings: &TraceSettings,
     batches: usize,
     samples: Samples,
+    keep_states: bool,
     progress: bool,
 ) -> (Film, Vec<PixelState>, Counters) {
     // Samples are dealt into k sequences whatever is kept, so an image does not depend on
@@ -268,7 +275,8 @@ pub fn render_image_samples(
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let origin = [0.0, camera_height_m, 0.0];
-    let rows: Vec<(Vec<PixelState>, Vec<f32>, Counters)> = (0..h)
+    type Row = (Vec<PixelState>, Vec<[f32; 3]>, Vec<f32>, Vec<f32>, Counters);
+    let rows: Vec<Row> = (0..h)
         .into_par_iter()
         .map(|y| {
             let mut c = Counters::default();
@@ -308,17 +316,26 @@ pub fn render_image_samples(
                 })
                 .collect::<Vec<PixelSums>>();
             bar.inc(1);
-            // Each row keeps only the states and the batch means (not the sums of every
-            // batch): the film's peak memory stays near the states'.
+            // Each row keeps the image, the variance and the batch means (not the sums of every
+            // batch), and the exact states only for a pass file (112 bytes a pixel).
             let means = row
                 .iter()
                 .flat_map(|p| (0..keep).map(|j| (p.batch[j] / p.batch_n[j].max(1) as f64) as f32))
                 .collect();
-            (row.iter().map(|p| p.state).collect(), means, c)
+            let states = if keep_states {
+                row.iter().map(|p| p.state).collect()
+            } else {
+                Vec::new()
+            };
+            let pixels = row.iter().map(|p| p.state.mean()).collect();
+            let var_y = row.iter().map(|p| p.state.var_of_mean()).collect();
+            (states, pixels, var_y, means, c)
         })
         .collect();
     bar.finish_and_clear();
-    let mut states = Vec::with_capacity(w * h);
+    let mut states = Vec::with_capacity(if keep_states { w * h } else { 0 });
+    let mut image = RgbImage::new(w, h);
+    let mut var_y = Vec::with_capacity(w * h);
     let mut batch_means = (keep >= 2).then(|| Batches {
         k: keep,
         // Sequence s mod k feeds batch (s mod k) mod keep.
@@ -329,15 +346,21 @@ pub fn render_image_samples(
     });
     let mut counters = Counters::default();
     // Rows are freed as they are moved into the film.
-    for (row, means, c) in rows {
+    for (y, (row, pixels, v, means, c)) in rows.into_iter().enumerate() {
         states.extend_from_slice(&row);
+        image.pixels[y * w..(y + 1) * w].copy_from_slice(&pixels);
+        var_y.extend_from_slice(&v);
         if let Some(b) = &mut batch_means {
             b.luminance.extend_from_slice(&means);
         }
         counters += c;
     }
-    let mut film = Film::from_states(w, h, spp, &states);
-    film.batches = batch_means;
+    let film = Film {
+        image,
+        var_y,
+        spp,
+        batches: batch_means,
+    };
     (film, states, counters)
 }
 

@@ -84,10 +84,15 @@ pub const MAX_FOLDED_FRACTION: f64 = 0.10;
 pub const BYTES_PER_TRIANGLE: u64 = 120;
 
 /// Refuses a render that cannot fit in memory, before anything is allocated.
-fn check_memory(cfg: &SceneConfig, triangles: usize, batches: usize) -> Result<(), RenderError> {
+fn check_memory(
+    cfg: &SceneConfig,
+    triangles: usize,
+    batches: usize,
+    keep_states: bool,
+) -> Result<(), RenderError> {
     let camera = Camera::new(cfg.camera.projection, cfg.camera.width, cfg.camera.aspect);
     let pixels = (camera.width * camera.height) as u64;
-    let film = super::film::film_bytes(pixels, batches);
+    let film = super::film::film_bytes(pixels, batches, keep_states);
     let mesh = triangles as u64 * BYTES_PER_TRIANGLE;
     let need = film + mesh;
     match crate::memory::available_bytes() {
@@ -263,12 +268,16 @@ pub fn prepare_for_frames(cfg: &SceneConfig) -> Result<Prepared, RenderError> {
 }
 
 fn prepare_built(cfg: &SceneConfig, refittable: bool) -> Result<Prepared, RenderError> {
+    // (the Rust BVH refits whatever it was built for; only Embree needs telling)
+    #[cfg(not(feature = "embree"))]
+    let _ = refittable;
     cfg.validate()?;
     let lod = crate::lod::params_for(&cfg.lod, &cfg.camera)?;
     check_memory(
         cfg,
         crate::lod::try_count(&lod)?.0,
         super::film::MAX_BATCHES,
+        false,
     )?;
     let pool = tracing_pool(cfg.render.threads)?;
     let threads = pool.current_num_threads();
@@ -448,16 +457,20 @@ impl Prepared {
         batches: usize,
         progress: bool,
     ) -> Result<Rendered, RenderError> {
-        Ok(self.render_samples(cfg, batches, Samples::ALL, progress)?.0)
+        Ok(self
+            .render_samples(cfg, batches, Samples::ALL, false, progress)?
+            .0)
     }
 
     /// As [`Prepared::render_batches`], taking only `samples` of each pixel's (one pass of
-    /// several), and returning each pixel's state as well (what a pass file holds).
+    /// several), and returning each pixel's exact state as well when `keep_states` (what a
+    /// pass file holds; empty otherwise).
     pub fn render_samples(
         &self,
         cfg: &SceneConfig,
         batches: usize,
         samples: Samples,
+        keep_states: bool,
         progress: bool,
     ) -> Result<(Rendered, Vec<PixelState>), RenderError> {
         cfg.validate()?;
@@ -470,7 +483,7 @@ impl Prepared {
             earth_radius_m: self.lod.earth_radius_m,
             sky: &self.sky,
         };
-        check_memory(cfg, 0, batches)?;
+        check_memory(cfg, 0, batches, keep_states)?;
         let mut settings = TraceSettings::new(cfg, self.sky_irradiance);
         settings.must_hit_below_y = self.must_hit_below_y(cfg.camera.height_m);
         let t = Instant::now();
@@ -484,6 +497,7 @@ impl Prepared {
                 &settings,
                 batches,
                 samples,
+                keep_states,
                 progress,
             )
         });
