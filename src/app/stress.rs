@@ -214,6 +214,22 @@ impl StressJob {
     }
 }
 
+/// Moves the camera along +x, in 1 m steps, to the first place where the sea under it stands
+/// below mean level: a camera centimetres above mean level is above the water there, whatever
+/// the realization (over a crest it would rightly be refused; `sea-storm-camera-under` tests
+/// that).
+fn over_a_trough(scene: &mut SceneConfig) {
+    let Ok(surface) = crate::ocean::Surface::new(&scene.ocean, scene.render.ocean_seed) else {
+        return; // the cell reports the bad sea itself
+    };
+    let [x0, z0] = scene.camera.position_m;
+    if let Some(x) = (0..10_000).map(|i| x0 + i as f64).find(|&x| {
+        crate::render::pipeline::surface_height_at_nadir(&surface.sampler([x, z0])) < 0.0
+    }) {
+        scene.camera.position_m = [x, z0];
+    }
+}
+
 /// The cells, base first (see the module doc).
 pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
     let mut cells = Vec::new();
@@ -255,7 +271,12 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
             name,
             "camera height",
             format!("{h} m"),
-            &|s| s.camera.height_m = h,
+            &|s| {
+                s.camera.height_m = h;
+                if h < 1.0 {
+                    over_a_trough(s);
+                }
+            },
             Extra::None,
         );
     }
