@@ -82,6 +82,10 @@ pub struct RenderConfig {
     pub backend: Backend,
     /// What to do when the shading normal disagrees with the triangle it shades.
     pub wrong_side: WrongSide,
+    /// Embree: build a compact BVH (`RTC_SCENE_FLAG_COMPACT`): paper-high's render peak 3.15 ->
+    /// 2.22 GB and a 1.6x faster build, for 15-18 % slower traversal (3-5 % of a render);
+    /// false for the fastest tracing when memory allows (README "Performance").
+    pub compact_bvh: bool,
 }
 
 impl Default for RenderConfig {
@@ -96,6 +100,7 @@ impl Default for RenderConfig {
             branch_depth: 3,
             backend: Backend::default(),
             wrong_side: WrongSide::default(),
+            compact_bvh: true,
         }
     }
 }

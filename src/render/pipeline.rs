@@ -320,6 +320,7 @@ fn prepare_built(cfg: &SceneConfig, refittable: bool) -> Result<Prepared, Render
                     } else {
                         BuildOptions::default().quality
                     },
+                    compact: cfg.render.compact_bvh,
                     ..BuildOptions::default()
                 };
                 let scene = Scene::new(&device, mesh, options)?;
