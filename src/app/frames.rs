@@ -242,9 +242,7 @@ impl fmt::Display for SequenceReport {
             self.height,
             self.spp,
             self.triangles,
-            self.embree_version
-                .as_deref()
-                .map_or_else(|| "Rust BVH".to_string(), |v| format!("Embree {v}")),
+            super::backend_label(self.embree_version.as_deref()),
             self.seconds_total
         )?;
         writeln!(

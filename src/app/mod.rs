@@ -126,6 +126,11 @@ impl From<crate::accel::embree::EmbreeError> for AppError {
     }
 }
 
+/// "Embree 3.13.5" or "Rust BVH": which structure traced, for the one-line summaries.
+pub fn backend_label(embree_version: Option<&str>) -> String {
+    embree_version.map_or_else(|| "Rust BVH".to_string(), |v| format!("Embree {v}"))
+}
+
 /// `PREFIX` + `ext`: the files of one output set (`out/render` -> `out/render.exr`).
 pub fn with_extension(prefix: &std::path::Path, ext: &str) -> std::path::PathBuf {
     let mut p = prefix.as_os_str().to_owned();

@@ -83,9 +83,7 @@ impl fmt::Display for RenderReport {
             self.height,
             self.spp,
             self.triangles,
-            self.embree_version
-                .as_deref()
-                .map_or_else(|| "Rust BVH".to_string(), |v| format!("Embree {v}")),
+            super::backend_label(self.embree_version.as_deref()),
             self.rays as f64 / 1e6,
             self.mrays_per_s
         )?;
