@@ -133,3 +133,23 @@ pub fn vastocean(args: &[&str]) -> (i32, String, String) {
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+/// Starts the binary with `args` and then `out`, its output discarded (for interrupting it).
+pub fn spawn_quiet(args: &[&str], out: &std::path::Path) -> std::process::Child {
+    std::process::Command::new(env!("CARGO_BIN_EXE_vastocean"))
+        .args(args)
+        .arg(out)
+        .stderr(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap()
+}
+
+/// Sends SIGINT (what Ctrl-C sends) to `child`; whether `kill` succeeded.
+pub fn interrupt(child: &std::process::Child) -> bool {
+    std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap()
+        .success()
+}

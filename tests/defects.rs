@@ -78,22 +78,17 @@ fn a_failed_run_leaves_the_previous_set_untouched_and_no_temporary_files() {
 fn an_interrupt_while_writing_removes_the_temporary_files() {
     let dir = tmp("sigint");
     let o = dir.join("o");
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_vastocean"))
-        .args([
-            "render",
-            "--width",
-            "2048",
-            "--spp",
-            "1",
-            "--threads",
-            "1",
-            "--out",
-        ])
-        .arg(&o)
-        .stderr(std::process::Stdio::null())
-        .stdout(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
+    let args = [
+        "render",
+        "--width",
+        "2048",
+        "--spp",
+        "1",
+        "--threads",
+        "1",
+        "--out",
+    ];
+    let mut child = crate::common::spawn_quiet(&args, &o);
     // Wait until the EXR is being written (its temporary file exists), then interrupt.
     let t = std::time::Instant::now();
     let mut seen = false;
@@ -110,13 +105,10 @@ fn an_interrupt_while_writing_removes_the_temporary_files() {
         }
         std::thread::sleep(std::time::Duration::from_millis(2));
     }
-    let killed = std::process::Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
+    let killed = crate::common::interrupt(&child);
     let status = child.wait().unwrap();
     let left = files(&dir);
-    if seen && killed.success() && status.code() == Some(130) {
+    if seen && killed && status.code() == Some(130) {
         assert!(left.is_empty(), "{left:?}");
     } else {
         // The run finished before the signal: then the whole set is there.

@@ -158,26 +158,21 @@ fn an_interrupted_sequence_keeps_its_finished_frames() {
     let dir = tmp("interrupt");
     std::fs::create_dir_all(&dir).unwrap();
     let o = dir.join("s");
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_vastocean"))
-        .args([
-            "render",
-            "--width",
-            "256",
-            "--spp",
-            "4",
-            "--threads",
-            "1",
-            "--backend",
-            "rust",
-            "--frames",
-            "0:100:1",
-            "--out",
-        ])
-        .arg(&o)
-        .stderr(std::process::Stdio::null())
-        .stdout(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
+    let args = [
+        "render",
+        "--width",
+        "256",
+        "--spp",
+        "4",
+        "--threads",
+        "1",
+        "--backend",
+        "rust",
+        "--frames",
+        "0:100:1",
+        "--out",
+    ];
+    let mut child = crate::common::spawn_quiet(&args, &o);
     let json = dir.join("s.json");
     let t = std::time::Instant::now();
     while !json.exists() && t.elapsed().as_secs() < 300 {
@@ -188,11 +183,7 @@ fn an_interrupted_sequence_keeps_its_finished_frames() {
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
     assert!(json.exists(), "no frame finished in 300 s");
-    let killed = std::process::Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(killed.success());
+    assert!(crate::common::interrupt(&child));
     assert_eq!(child.wait().unwrap().code(), Some(130));
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();

@@ -138,8 +138,8 @@ impl Default for OceanParams {
             // Overlapping layers (see `partition`). The two 2048-texel layers of 12.7 and 10.3 km
             // (ratio 1.233) carry the spectral peak of case 22 (54 m) with 8-10 texels per
             // wavelength and periods beyond the 10 km the repeat metric looks at; 41.9 m takes
-            // over from 21 m waves down (2 of its fundamentals), 5.83 m / 256 = 2.3 cm spacing for 3 cm triangles near
-            // the camera.
+            // over from 21 m waves down (2 of its fundamentals); 5.83 m / 256 = 2.3 cm spacing
+            // for 3 cm triangles near the camera.
             layers: vec![
                 LayerSpec {
                     size_m: 12_700.0,

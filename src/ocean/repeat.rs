@@ -79,8 +79,9 @@ pub fn correlation_by_lag(sampler: &Sampler, dx: f64, dz: f64) -> Vec<f64> {
         })
         .collect();
     let mean = lines.iter().flatten().sum::<f64>() / (LINES * len) as f64;
-    let fft = FftPlanner::<f64>::new().plan_fft_forward(n_fft);
-    let ifft = FftPlanner::<f64>::new().plan_fft_inverse(n_fft);
+    let mut planner = FftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(n_fft);
+    let ifft = planner.plan_fft_inverse(n_fft);
     // sum over lines of conj(A) B, A the window's transform and B the line's
     let zero = || vec![Complex::<f64>::default(); n_fft];
     let cross = lines
