@@ -1,6 +1,7 @@
-//! The build: binned SAH (16 bins over centroid bounds, Wald 2007) on primitive references
-//! partitioned in place, the top levels split across threads with `rayon::join` (and binning of
-//! the largest nodes across chunks), then flattened into the sibling-pair layout.
+//! The build: binned SAH (up to 16 bins over centroid bounds, Wald 2007) on 32-byte primitive
+//! references (4-wide boxes, Embree's layout) partitioned in place without branches, the top
+//! levels split across threads with `rayon::join` (and binning of the largest nodes across
+//! chunks), then flattened into the sibling-pair layout.
 
 use std::sync::Arc;
 
@@ -33,12 +34,17 @@ const EMPTY_BIN: Bin = Bin {
     count: 0,
 };
 
-type Bins = [[Bin; BINS]; 3];
+/// Bins of all three axes; `N` is [`BINS`] or, for small nodes, fewer (see [`decide`]): a
+/// node's bins are cleared, filled and swept once, so their number, not the triangles, is most
+/// of a small node's cost.
+type Bins<const N: usize> = [[Bin; N]; 3];
 
-/// Maps a centroid to its bin on each axis; axes with no centroid extent get scale 0.
+/// Maps a centroid to its bin on each axis; axes with no centroid extent get scale 0. Centroids
+/// are kept doubled (`lo + hi`, see [`PrimRef::centroid2`]) throughout the build, and so are
+/// the centroid bounds it is made from.
 struct BinMap {
-    lo: [f32; 3],
-    scale: [f32; 3],
+    lo: [f32; 4],
+    scale: [f32; 4],
     /// Bins in use, at most [`BINS`].
     count: usize,
 }
@@ -50,31 +56,59 @@ impl BinMap {
             lo: cb.lo,
             scale: std::array::from_fn(|k| {
                 let e = cb.hi[k] - cb.lo[k];
-                if e > 0.0 { count as f32 / e } else { 0.0 }
+                if k < 3 && e > 0.0 {
+                    count as f32 / e
+                } else {
+                    0.0
+                }
             }),
             count,
         }
     }
-    /// The float-to-int cast saturates, so rounding past either end stays in range.
+    /// The bins of `r` on the three axes, computed together (one 4-wide subtract and
+    /// multiply). The float-to-int cast saturates, so rounding past either end stays in range.
     #[inline]
-    fn bin(&self, c: [f32; 3], k: usize) -> usize {
+    fn bins(&self, r: &PrimRef) -> [usize; 3] {
+        let c = r.centroid2();
+        let t: [f32; 4] = std::array::from_fn(|k| (c[k] - self.lo[k]) * self.scale[k]);
+        std::array::from_fn(|k| (t[k] as usize).min(self.count - 1))
+    }
+    #[inline]
+    fn bin(&self, r: &PrimRef, k: usize) -> usize {
+        let c = r.centroid2();
         (((c[k] - self.lo[k]) * self.scale[k]) as usize).min(self.count - 1)
     }
 }
 
-/// A triangle as the build sees it. The build partitions these in place rather than an index
-/// array, so binning and partitioning stream through memory instead of gathering from it.
+/// A triangle as the build sees it: its box, with the triangle's id in the lower corner's unused
+/// fourth lane (bit-cast, as Embree's `PrimRef` does), so a reference is one aligned 32-byte
+/// record. The build partitions these in place rather than an index array, so binning and
+/// partitioning stream through memory instead of gathering from it.
 #[derive(Clone, Copy)]
-struct PrimRef {
-    bounds: Aabb,
-    id: u32,
-}
+struct PrimRef(Aabb);
 
 impl PrimRef {
-    #[inline]
-    fn centroid(&self) -> [f32; 3] {
-        self.bounds.centroid()
+    fn new(mut bounds: Aabb, id: u32) -> PrimRef {
+        bounds.lo[3] = f32::from_bits(id);
+        bounds.hi[3] = f32::from_bits(id);
+        PrimRef(bounds)
     }
+    #[inline]
+    fn id(&self) -> u32 {
+        self.0.lo[3].to_bits()
+    }
+    /// Twice the centroid, `lo + hi` (the fourth lane is meaningless).
+    #[inline]
+    fn centroid2(&self) -> [f32; 4] {
+        std::array::from_fn(|k| self.0.lo[k] + self.0.hi[k])
+    }
+}
+
+/// Grows centroid bounds (doubled, see [`BinMap`]) by a reference's centroid.
+#[inline]
+fn grow_centroid(cb: &mut Aabb, r: &PrimRef) {
+    let c = r.centroid2();
+    cb.grow([c[0], c[1], c[2]]);
 }
 
 enum Decision {
@@ -87,20 +121,20 @@ enum Decision {
     },
 }
 
-fn bin_slice(refs: &[PrimRef], map: &BinMap) -> Bins {
-    let mut bins = [[EMPTY_BIN; BINS]; 3];
+fn bin_slice<const N: usize>(refs: &[PrimRef], map: &BinMap) -> Bins<N> {
+    let mut bins = [[EMPTY_BIN; N]; 3];
     for r in refs {
-        let (c, b) = (r.centroid(), &r.bounds);
-        for (k, axis) in bins.iter_mut().enumerate() {
-            let bin = &mut axis[map.bin(c, k)];
+        let idx = map.bins(r);
+        for (axis, &i) in bins.iter_mut().zip(&idx) {
+            let bin = &mut axis[i];
             bin.count += 1;
-            bin.bounds.join(b);
+            bin.bounds.join(&r.0);
         }
     }
     bins
 }
 
-fn merge_bins(mut a: Bins, b: Bins) -> Bins {
+fn merge_bins<const N: usize>(mut a: Bins<N>, b: Bins<N>) -> Bins<N> {
     for (x, y) in a.iter_mut().flatten().zip(b.iter().flatten()) {
         x.count += y.count;
         x.bounds.join(&y.bounds);
@@ -116,19 +150,29 @@ fn decide(ids: &mut [PrimRef], b: &Aabb, cb: &Aabb) -> Decision {
         return Decision::Leaf;
     }
     let map = BinMap::new(cb, n);
-    if map.scale == [0.0; 3] {
+    if map.scale == [0.0; 4] {
         // Every centroid coincides: SAH cannot separate them, so only size forces a split.
         if n <= MAX_LEAF {
             return Decision::Leaf;
         }
         return median_split(ids);
     }
-    let bins = if n >= PARALLEL_BIN_MIN {
+    match map.count {
+        ..=4 => decide_binned::<4>(ids, b, &map),
+        ..=8 => decide_binned::<8>(ids, b, &map),
+        _ => decide_binned::<BINS>(ids, b, &map),
+    }
+}
+
+/// [`decide`] with `N >= map.count` bins per axis.
+fn decide_binned<const N: usize>(ids: &mut [PrimRef], b: &Aabb, map: &BinMap) -> Decision {
+    let n = ids.len();
+    let bins: Bins<N> = if n >= PARALLEL_BIN_MIN {
         ids.par_chunks(PARALLEL_BIN_MIN / 2)
-            .map(|c| bin_slice(c, &map))
-            .reduce(|| [[EMPTY_BIN; BINS]; 3], merge_bins)
+            .map(|c| bin_slice(c, map))
+            .reduce(|| [[EMPTY_BIN; N]; 3], merge_bins)
     } else {
-        bin_slice(ids, &map)
+        bin_slice(ids, map)
     };
     // Sweep each axis: suffix costs right to left, then prefix left to right.
     let mut best = (f32::INFINITY, 0usize, 0usize);
@@ -136,7 +180,7 @@ fn decide(ids: &mut [PrimRef], b: &Aabb, cb: &Aabb) -> Decision {
         if map.scale[k] == 0.0 {
             continue;
         }
-        let mut right_cost = [0f32; BINS];
+        let mut right_cost = [0f32; N];
         let (mut acc, mut cnt) = (Aabb::EMPTY, 0u32);
         for i in (1..map.count).rev() {
             acc.join(&axis[i].bounds);
@@ -179,23 +223,24 @@ fn decide(ids: &mut [PrimRef], b: &Aabb, cb: &Aabb) -> Decision {
             rb.join(&bin.bounds);
         }
     }
-    let (mut lcb, mut rcb) = (Aabb::EMPTY, Aabb::EMPTY);
-    let (mut i, mut j) = (0, n);
-    while i < j {
-        let c = ids[i].centroid();
-        if map.bin(c, axis) < split {
-            lcb.grow(c);
-            i += 1;
-        } else {
-            rcb.grow(c);
-            j -= 1;
-            ids.swap(i, j);
-        }
+    // Branch-free Lomuto partition: every reference is swapped with the first right-hand one
+    // and the boundary advances by the comparison. Which side a triangle goes is a coin toss to
+    // the branch predictor, and a branching partition paid a misprediction on half of them.
+    let mut mid = 0;
+    for i in 0..n {
+        let left = map.bin(&ids[i], axis) < split;
+        ids.swap(i, mid);
+        mid += left as usize;
     }
+    let centroid_bounds = |s: &[PrimRef]| {
+        let mut cb = Aabb::EMPTY;
+        s.iter().for_each(|r| grow_centroid(&mut cb, r));
+        cb
+    };
     Decision::Split {
-        mid: i,
-        left: (lb, lcb),
-        right: (rb, rcb),
+        mid,
+        left: (lb, centroid_bounds(&ids[..mid])),
+        right: (rb, centroid_bounds(&ids[mid..])),
     }
 }
 
@@ -204,8 +249,8 @@ fn median_split(ids: &[PrimRef]) -> Decision {
     let side = |s: &[PrimRef]| {
         let (mut b, mut cb) = (Aabb::EMPTY, Aabb::EMPTY);
         for r in s {
-            b.join(&r.bounds);
-            cb.grow(r.centroid());
+            b.join(&r.0);
+            grow_centroid(&mut cb, r);
         }
         (b, cb)
     };
@@ -304,7 +349,7 @@ pub(super) fn build_nodes(mesh: &Arc<Mesh>) -> (Vec<Node>, Vec<u32>) {
         .map(|id| {
             let mut bounds = Aabb::EMPTY;
             mesh.triangle(id).iter().for_each(|&v| bounds.grow(v));
-            PrimRef { bounds, id }
+            PrimRef::new(bounds, id)
         })
         .collect();
     let (b, cb) = refs
@@ -312,8 +357,8 @@ pub(super) fn build_nodes(mesh: &Arc<Mesh>) -> (Vec<Node>, Vec<u32>) {
         .fold(
             || (Aabb::EMPTY, Aabb::EMPTY),
             |(mut b, mut cb), r| {
-                b.join(&r.bounds);
-                cb.grow(r.centroid());
+                b.join(&r.0);
+                grow_centroid(&mut cb, r);
                 (b, cb)
             },
         )
@@ -330,6 +375,6 @@ pub(super) fn build_nodes(mesh: &Arc<Mesh>) -> (Vec<Node>, Vec<u32>) {
     // Root and padding: from here on nodes are appended in pairs, at even indices.
     nodes.extend([Node::default(); 2]);
     flatten(upper, &mut nodes, 0);
-    let ids: Vec<u32> = refs.par_iter().map(|r| r.id).collect();
+    let ids: Vec<u32> = refs.par_iter().map(PrimRef::id).collect();
     (nodes, ids)
 }

@@ -22,10 +22,11 @@ pub(super) struct Pair(pub(super) [Node; 2]);
 
 impl Node {
     pub(super) fn new(b: &Aabb, index: usize, count: usize) -> Node {
+        let (lo, hi) = b.corners();
         Node {
-            lo: b.lo,
+            lo,
             count: count as u32,
-            hi: b.hi,
+            hi,
             index: index as u32,
         }
     }
@@ -42,27 +43,32 @@ fn fmax(a: f32, b: f32) -> f32 {
     if a > b { a } else { b }
 }
 
+/// A box with a fourth, unused lane on each corner, so that joining two boxes or growing one by
+/// a point is one 4-wide min and max (LLVM vectorises the fixed-size loops): the build does little
+/// else. The fourth lane holds whatever the boxes joined held there (see `PrimRef`); nothing
+/// reads it.
 #[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
 pub(super) struct Aabb {
-    pub(super) lo: [f32; 3],
-    pub(super) hi: [f32; 3],
+    pub(super) lo: [f32; 4],
+    pub(super) hi: [f32; 4],
 }
 
 impl Aabb {
     pub(super) const EMPTY: Aabb = Aabb {
-        lo: [f32::INFINITY; 3],
-        hi: [f32::NEG_INFINITY; 3],
+        lo: [f32::INFINITY; 4],
+        hi: [f32::NEG_INFINITY; 4],
     };
     #[inline]
     pub(super) fn grow(&mut self, p: [f32; 3]) {
-        for ((lo, hi), c) in self.lo.iter_mut().zip(&mut self.hi).zip(p) {
-            *lo = fmin(*lo, c);
-            *hi = fmax(*hi, c);
+        for k in 0..3 {
+            self.lo[k] = fmin(self.lo[k], p[k]);
+            self.hi[k] = fmax(self.hi[k], p[k]);
         }
     }
     #[inline]
     pub(super) fn join(&mut self, b: &Aabb) {
-        for k in 0..3 {
+        for k in 0..4 {
             self.lo[k] = fmin(self.lo[k], b.lo[k]);
             self.hi[k] = fmax(self.hi[k], b.hi[k]);
         }
@@ -73,8 +79,13 @@ impl Aabb {
         let d: [f32; 3] = std::array::from_fn(|k| (self.hi[k] - self.lo[k]).max(0.0));
         d[0] * d[1] + d[1] * d[2] + d[2] * d[0]
     }
-    pub(super) fn centroid(&self) -> [f32; 3] {
-        std::array::from_fn(|k| 0.5 * (self.lo[k] + self.hi[k]))
+    /// The lower and upper corners' first three lanes.
+    #[inline]
+    pub(super) fn corners(&self) -> ([f32; 3], [f32; 3]) {
+        (
+            [self.lo[0], self.lo[1], self.lo[2]],
+            [self.hi[0], self.hi[1], self.hi[2]],
+        )
     }
 }
 

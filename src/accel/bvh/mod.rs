@@ -188,8 +188,7 @@ fn refit_node(nodes: &mut [Pair], tris: &[[[f32; 3]; 3]], i: usize) -> layout::A
         }
     }
     let node = &mut nodes[i / 2].0[i % 2];
-    node.lo = b.lo;
-    node.hi = b.hi;
+    (node.lo, node.hi) = b.corners();
     b
 }
 
