@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::layout::{Aabb, Node};
+use super::layout::{Aabb, Node, Pair};
 use crate::mesh::Mesh;
 
 /// Most bins per axis in the SAH sweep; 16 is where more bins stop paying for themselves
@@ -262,48 +262,62 @@ fn median_split(ids: &[PrimRef]) -> Decision {
 }
 
 /// Builds the subtree of `ids` (the leaf-order range starting at `offset`) into `nodes`, with
-/// its root written at `slot`.
+/// its root written at `slot`; returns the subtree's depth.
 fn build_serial(
     ids: &mut [PrimRef],
     offset: usize,
     (b, cb): (Aabb, Aabb),
     nodes: &mut Vec<Node>,
     slot: usize,
-) {
+) -> usize {
     match decide(ids, &b, &cb) {
-        Decision::Leaf => nodes[slot] = Node::new(&b, offset, ids.len()),
+        Decision::Leaf => {
+            nodes[slot] = Node::new(&b, offset, ids.len());
+            1
+        }
         Decision::Split { mid, left, right } => {
             let c = nodes.len();
             nodes.extend([Node::default(); 2]);
             nodes[slot] = Node::new(&b, c, 0);
             let (l, r) = ids.split_at_mut(mid);
-            build_serial(l, offset, left, nodes, c);
-            build_serial(r, offset + mid, right, nodes, c + 1);
+            let dl = build_serial(l, offset, left, nodes, c);
+            let dr = build_serial(r, offset + mid, right, nodes, c + 1);
+            1 + dl.max(dr)
         }
     }
 }
 
 /// The parallel top of the tree; below [`PARALLEL_MIN`] triangles each task builds a flat
-/// subtree whose root is its element 0.
+/// subtree whose root is its element 0 and whose siblings follow in pairs from element 1.
 enum Upper {
     Inner(Aabb, Box<Upper>, Box<Upper>),
-    Subtree(Vec<Node>),
+    Subtree { nodes: Vec<Node>, depth: usize },
+}
+
+impl Upper {
+    /// Nodes in the final layout, without the root.
+    fn nodes_below(&self) -> usize {
+        match self {
+            Upper::Inner(_, l, r) => 2 + l.nodes_below() + r.nodes_below(),
+            Upper::Subtree { nodes, .. } => nodes.len() - 1,
+        }
+    }
 }
 
 fn build_parallel(ids: &mut [PrimRef], offset: usize, bc: (Aabb, Aabb)) -> Upper {
     let n = ids.len();
     if n < PARALLEL_MIN {
-        let mut nodes = Vec::with_capacity(n);
+        // A binary tree over n triangles has fewer than 2n nodes.
+        let mut nodes = Vec::with_capacity(2 * n);
         nodes.push(Node::default());
-        build_serial(ids, offset, bc, &mut nodes, 0);
-        return Upper::Subtree(nodes);
+        let depth = build_serial(ids, offset, bc, &mut nodes, 0);
+        return Upper::Subtree { nodes, depth };
     }
     match decide(ids, &bc.0, &bc.1) {
-        Decision::Leaf => {
-            let mut nodes = vec![Node::default()];
-            nodes[0] = Node::new(&bc.0, offset, n);
-            Upper::Subtree(nodes)
-        }
+        Decision::Leaf => Upper::Subtree {
+            nodes: vec![Node::new(&bc.0, offset, n)],
+            depth: 1,
+        },
         Decision::Split { mid, left, right } => {
             let (l, r) = ids.split_at_mut(mid);
             let (l, r) = rayon::join(
@@ -315,34 +329,48 @@ fn build_parallel(ids: &mut [PrimRef], offset: usize, bc: (Aabb, Aabb)) -> Upper
     }
 }
 
-/// Copies `up` into `nodes` in final layout, its root at `slot`.
-fn flatten(up: Upper, nodes: &mut Vec<Node>, slot: usize) {
+/// Appends `up` to `pairs` in final layout, its root written at node `slot`; returns its depth.
+fn flatten(up: Upper, pairs: &mut Vec<Pair>, slot: usize) -> usize {
+    let set = |pairs: &mut Vec<Pair>, i: usize, n: Node| pairs[i / 2].0[i % 2] = n;
     match up {
-        Upper::Subtree(sub) => {
+        Upper::Subtree { nodes, depth } => {
             // Local child indices start at 1 (0 is the root, which goes to `slot`).
-            let base = nodes.len() as u32;
+            let base = 2 * pairs.len() as u32;
             let relocate = |mut n: Node| {
                 if n.count == 0 {
                     n.index = n.index - 1 + base;
                 }
                 n
             };
-            nodes[slot] = relocate(sub[0]);
-            nodes.extend(sub[1..].iter().map(|&n| relocate(n)));
+            set(pairs, slot, relocate(nodes[0]));
+            pairs.extend(
+                nodes[1..]
+                    .chunks_exact(2)
+                    .map(|c| Pair([relocate(c[0]), relocate(c[1])])),
+            );
+            depth
         }
         Upper::Inner(b, l, r) => {
-            let c = nodes.len();
-            nodes.extend([Node::default(); 2]);
-            nodes[slot] = Node::new(&b, c, 0);
-            flatten(*l, nodes, c);
-            flatten(*r, nodes, c + 1);
+            let c = 2 * pairs.len();
+            pairs.push(Pair::default());
+            set(pairs, slot, Node::new(&b, c, 0));
+            let dl = flatten(*l, pairs, c);
+            let dr = flatten(*r, pairs, c + 1);
+            1 + dl.max(dr)
         }
     }
 }
 
-/// Builds the node array (root at 0, node 1 padding, siblings at even indices) over `mesh` on
-/// the current rayon pool, and returns it with the triangle ids in leaf order.
-pub(super) fn build_nodes(mesh: &Arc<Mesh>) -> (Vec<Node>, Vec<u32>) {
+/// The built tree: sibling pairs (node 0 the root, node 1 padding), the triangle ids in leaf
+/// order and the depth (levels from the root to the deepest leaf).
+pub(super) struct Built {
+    pub(super) pairs: Vec<Pair>,
+    pub(super) ids: Vec<u32>,
+    pub(super) depth: usize,
+}
+
+/// Builds the tree over `mesh` on the current rayon pool.
+pub(super) fn build_nodes(mesh: &Arc<Mesh>) -> Built {
     let n = mesh.triangle_count();
     let mut refs: Vec<PrimRef> = (0..n as u32)
         .into_par_iter()
@@ -371,10 +399,10 @@ pub(super) fn build_nodes(mesh: &Arc<Mesh>) -> (Vec<Node>, Vec<u32>) {
             },
         );
     let upper = build_parallel(&mut refs, 0, (b, cb));
-    let mut nodes = Vec::with_capacity(n.div_ceil(2) + 2);
-    // Root and padding: from here on nodes are appended in pairs, at even indices.
-    nodes.extend([Node::default(); 2]);
-    flatten(upper, &mut nodes, 0);
-    let ids: Vec<u32> = refs.par_iter().map(PrimRef::id).collect();
-    (nodes, ids)
+    // Root and padding first: from there on nodes are appended in pairs, at even indices.
+    let mut pairs = Vec::with_capacity(1 + upper.nodes_below() / 2);
+    pairs.push(Pair::default());
+    let depth = flatten(upper, &mut pairs, 0);
+    let ids = refs.par_iter().map(PrimRef::id).collect();
+    Built { pairs, ids, depth }
 }

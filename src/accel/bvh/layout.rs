@@ -88,18 +88,3 @@ impl Aabb {
         )
     }
 }
-
-/// Levels from the root to the deepest leaf.
-pub(super) fn tree_depth(nodes: &[Node]) -> usize {
-    let mut deepest = 0;
-    let mut todo = vec![(0usize, 1usize)];
-    while let Some((i, d)) = todo.pop() {
-        deepest = deepest.max(d);
-        let n = &nodes[i];
-        if n.count == 0 {
-            todo.push((n.index as usize, d + 1));
-            todo.push((n.index as usize + 1, d + 1));
-        }
-    }
-    deepest
-}

@@ -23,7 +23,7 @@ use std::time::Instant;
 use super::{Accel, Hit, Ray};
 use crate::mesh::Mesh;
 pub use build::MAX_LEAF;
-use layout::{Node, Pair, tree_depth};
+use layout::{Node, Pair};
 pub use traverse::intersect_triangle;
 
 /// The Rust BVH over one mesh.
@@ -47,13 +47,11 @@ impl Bvh {
     pub fn build(mesh: Arc<Mesh>) -> Bvh {
         use rayon::prelude::*;
         let start = Instant::now();
-        let (nodes, ids) = build::build_nodes(&mesh);
+        let build::Built { pairs, ids, depth } = build::build_nodes(&mesh);
         let tris: Vec<[[f32; 3]; 3]> = ids.par_iter().map(|&p| mesh.triangle(p)).collect();
-        let depth = tree_depth(&nodes);
-        let nodes = nodes.chunks_exact(2).map(|c| Pair([c[0], c[1]])).collect();
         Bvh {
             mesh,
-            nodes,
+            nodes: pairs,
             tris,
             prims: ids,
             depth,
@@ -123,14 +121,17 @@ impl Bvh {
     }
 
     /// Checks the structure: every triangle in exactly one leaf, leaves of 1 to
-    /// [`MAX_LEAF`] triangles, every node's box enclosing its children or triangles. For tests.
+    /// [`MAX_LEAF`] triangles, every node's box enclosing its children or triangles, the depth
+    /// the build recorded (which sizes the traversal stack) the tree's. For tests.
     pub fn validate(&self) -> Result<(), String> {
         let mut seen = vec![false; self.tris.len()];
-        let mut todo = vec![0usize];
+        let mut todo = vec![(0usize, 1usize)];
+        let mut deepest = 0;
         let inside = |outer: &Node, lo: [f32; 3], hi: [f32; 3]| {
             (0..3).all(|k| outer.lo[k] <= lo[k] && hi[k] <= outer.hi[k])
         };
-        while let Some(i) = todo.pop() {
+        while let Some((i, depth)) = todo.pop() {
+            deepest = deepest.max(depth);
             let n = self.node(i);
             if n.count == 0 {
                 let c = n.index as usize;
@@ -141,7 +142,7 @@ impl Bvh {
                     if !inside(n, self.node(ch).lo, self.node(ch).hi) {
                         return Err(format!("child {ch} sticks out of node {i}"));
                     }
-                    todo.push(ch);
+                    todo.push((ch, depth + 1));
                 }
             } else {
                 if n.count as usize > MAX_LEAF {
@@ -164,6 +165,9 @@ impl Bvh {
         ids.sort_unstable();
         if seen.iter().any(|s| !s) || ids.iter().enumerate().any(|(i, &p)| p as usize != i) {
             return Err("leaves do not hold each triangle exactly once".into());
+        }
+        if deepest != self.depth {
+            return Err(format!("depth {} recorded, {deepest} walked", self.depth));
         }
         Ok(())
     }
