@@ -60,6 +60,12 @@ pub mod field {
 /// The eight fields at one grid point, in [`field`] order.
 pub type Texel = [f32; FIELD_COUNT];
 
+/// The derivative fields, [`field::DH_DX`] to [`field::DDX_DZ`] (the last five of a texel):
+/// all that a normal needs.
+pub const SLOPES: std::ops::Range<usize> = field::DH_DX..FIELD_COUNT;
+/// The five derivative fields at one point, in [`field`] order from [`field::DH_DX`].
+pub type Slopes = [f32; 5];
+
 type C32 = Complex<f32>;
 
 /// Cells closer to k = 0 than this many fundamentals are integrated on at least an 8 x 8

@@ -346,7 +346,7 @@ impl SceneRef<'_> {
                 let timed = c.normal_evals.is_multiple_of(64);
                 let t0 = timed.then(std::time::Instant::now);
                 let uv = self.accel.interpolate_uv(hit);
-                let n = Vec3::from(ocean.sample(uv[0], uv[1]).normal);
+                let n = Vec3::from(ocean.normal(uv[0], uv[1]));
                 let n = tilt_to_earth(uv[0], uv[1], self.earth_radius_m, n);
                 c.normal_evals += 1;
                 if let Some(t0) = t0 {
