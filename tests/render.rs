@@ -57,6 +57,7 @@ fn scene_ref<'a>(
     SceneRef {
         accel,
         skip_slope: None,
+        skip_above_y: None,
         ocean: Some(sampler),
         earth_radius_m,
         sky,
@@ -354,11 +355,13 @@ fn skipping_rays_that_cannot_return_changes_no_pixel() {
     let mesh = ocean_grid(&sampler, 40.0, 0.5);
     let slope = vastocean::render::integrator::max_descent_slope(&mesh).expect("a height field");
     assert!(slope > 0.0 && slope < 5.0, "{slope}");
+    let top = vastocean::render::integrator::highest_vertex_y(&mesh);
     let accel = accel(mesh);
     let sky = Sky::analytic(AnalyticSky::default());
-    let render = |skip_slope| {
+    let render = |skip_slope, skip_above_y| {
         let scene = SceneRef {
             skip_slope,
+            skip_above_y,
             accel: accel.as_ref(),
             ocean: Some(sampler),
             earth_radius_m: 6_371_000.0,
@@ -375,19 +378,27 @@ fn skipping_rays_that_cannot_return_changes_no_pixel() {
             false,
         )
     };
-    let (a, ca) = render(None);
-    let (b, cb) = render(Some(slope));
-    let (a, b) = (a.image, b.image);
+    let (a, ca) = render(None, None);
+    let (b, cb) = render(Some(slope), None);
+    // The band reaches 5 degrees above the horizon: the camera's rays there leave upwards
+    // from 2 m, above every vertex, and are skipped too.
+    let (c, cc) = render(Some(slope), top);
     assert!(
         cb.skipped > 1000 && cb.rays + cb.skipped == ca.rays,
         "{ca:?} {cb:?}"
     );
     assert!(
+        cc.skipped_above > 500 && cc.rays + cc.skipped_above == cb.rays,
+        "{cb:?} {cc:?}"
+    );
+    let same = |a: &vastocean::image_io::RgbImage, b: &vastocean::image_io::RgbImage| {
         a.pixels
             .iter()
             .zip(&b.pixels)
             .all(|(p, q)| p.map(f32::to_bits) == q.map(f32::to_bits))
-    );
+    };
+    assert!(same(&a.image, &b.image));
+    assert!(same(&a.image, &c.image));
     // A fold: the middle triangle is wound facing down (an overhang), so a ray under the upper
     // sheet could meet the inverted one. The shortcut must switch itself off.
     let folded = Mesh::new(

@@ -92,6 +92,9 @@ pub struct Counters {
     pub truncated: u64,
     /// Rays in the water known not to meet the surface again, so not traced.
     pub skipped: u64,
+    /// Rays leaving upwards from above the mesh's highest vertex, so never meeting it: not
+    /// traced (the camera's upper half, for one).
+    pub skipped_above: u64,
     /// Mapped-normal evaluations, and the nanoseconds spent in the timed 1-in-64 of them.
     pub normal_evals: u64,
     pub normal_timed: u64,
@@ -111,6 +114,7 @@ impl std::ops::AddAssign for Counters {
         self.terminated += o.terminated;
         self.truncated += o.truncated;
         self.skipped += o.skipped;
+        self.skipped_above += o.skipped_above;
         self.normal_evals += o.normal_evals;
         self.normal_timed += o.normal_timed;
         self.normal_timed_ns += o.normal_timed_ns;
@@ -195,6 +199,17 @@ pub fn max_descent_slope(mesh: &Mesh) -> Option<f32> {
     (worst < 1.0).then_some(worst)
 }
 
+/// The largest y of any vertex: a ray leaving upwards from above it never meets the mesh (every
+/// point of a triangle is a mean of its vertices), so it need not be traced
+/// (`SceneRef::skip_above_y`). `None` for an empty mesh.
+pub fn highest_vertex_y(mesh: &Mesh) -> Option<f32> {
+    use rayon::prelude::*;
+    mesh.positions()
+        .par_iter()
+        .map(|p| p[1])
+        .reduce_with(f32::max)
+}
+
 /// What the integrator traces against.
 pub struct SceneRef<'a> {
     pub accel: &'a dyn Accel,
@@ -202,6 +217,9 @@ pub struct SceneRef<'a> {
     /// traced (they cannot hit the surface) and return the upwelling radiance directly. `None`
     /// traces every ray.
     pub skip_slope: Option<f32>,
+    /// From [`highest_vertex_y`]: rays in the air leaving upwards from above this height are
+    /// not traced (nothing lies above it) and see the sky directly. `None` traces every ray.
+    pub skip_above_y: Option<f32>,
     /// The ocean, for mapped normals (required for `NormalMode::Mapped`).
     pub ocean: Option<Sampler<'a>>,
     pub earth_radius_m: f64,
@@ -403,6 +421,14 @@ impl SceneRef<'_> {
         {
             c.skipped += 1;
             return Vec3::from(settings.upwelling);
+        }
+        if !in_water
+            && d.y >= 0.0
+            && let Some(top) = self.skip_above_y
+            && ray.org[1] > top
+        {
+            c.skipped_above += 1;
+            return self.sky.radiance(Vec3::from(ray.org), d);
         }
         c.rays += 1;
         let Some(hit) = self.accel.intersect(ray) else {

@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::film::{Film, PixelState, Samples};
-use super::integrator::max_descent_slope;
+use super::integrator::{highest_vertex_y, max_descent_slope};
 use super::{Camera, Counters, SceneRef, TraceSettings, render_image_samples};
 use crate::accel::bvh::Bvh;
 #[cfg(feature = "embree")]
@@ -246,6 +246,7 @@ pub struct Prepared {
     pub embree_version: Option<String>,
     pub sky: Sky,
     pub skip_slope: Option<f32>,
+    pub skip_above_y: Option<f32>,
     /// The sky's downwelling irradiance, which sets the water-leaving radiance.
     pub sky_irradiance: glam::Vec3,
     pub stats: LodStats,
@@ -306,6 +307,7 @@ fn prepare_built(cfg: &SceneConfig, refittable: bool) -> Result<Prepared, Render
             Ok((ocean, seconds_ocean, mesh, stats, t.elapsed().as_secs_f64()))
         })?;
     let skip_slope = max_descent_slope(&mesh);
+    let skip_above_y = highest_vertex_y(&mesh);
     let mesh = Arc::new(mesh);
     let (accel, seconds_build, embree_version): (Box<dyn Accel>, f64, Option<String>) =
         match cfg.render.backend {
@@ -342,6 +344,7 @@ fn prepare_built(cfg: &SceneConfig, refittable: bool) -> Result<Prepared, Render
         embree_version,
         sky,
         skip_slope,
+        skip_above_y,
         sky_irradiance,
         stats,
         seconds_ocean,
@@ -408,6 +411,7 @@ impl Prepared {
             })?;
         drop((positions, normals));
         self.skip_slope = max_descent_slope(self.accel.mesh());
+        self.skip_above_y = highest_vertex_y(self.accel.mesh());
         let seconds_geometry = t.elapsed().as_secs_f64() - seconds_refit;
         Ok(FrameUpdate {
             seconds_ocean,
@@ -480,6 +484,7 @@ impl Prepared {
         let scene_ref = SceneRef {
             accel: self.accel.as_ref(),
             skip_slope: self.skip_slope,
+            skip_above_y: self.skip_above_y,
             ocean: Some(sampler),
             earth_radius_m: self.lod.earth_radius_m,
             sky: &self.sky,
