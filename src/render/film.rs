@@ -25,7 +25,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 use super::camera::Camera;
-use super::integrator::{Counters, SceneRef, TraceSettings};
+use super::integrator::{CAMERA_BATCH, Counters, SceneRef, TraceSettings};
 use crate::accel::Ray;
 use crate::color::luminance;
 use crate::image_io::RgbImage;
@@ -306,26 +306,47 @@ pub fn render_image_samples(
                         let mut rot = Rng::keyed(&[seed, pixel, u64::MAX - b as u64]);
                         (rot.f64(), rot.f64())
                     });
-                    for s in (samples.pass as u32..spp).step_by(samples.passes) {
-                        let b = s as usize % k;
-                        let ((ox, oy), j) = (offsets[b], (s as usize / k) as f64);
-                        let jx = (ox + j * R2.0).fract() as f32;
-                        let jy = (oy + j * R2.1).fract() as f32;
-                        let dir = camera.direction(x as f32 + jx, y as f32 + jy);
-                        let mut rng = Rng::keyed(&[seed, pixel, s as u64]);
-                        let l: Vec3 = scene.radiance(
-                            &Ray::new(origin, dir.to_array()),
-                            false,
-                            0,
+                    // The pixel's samples go to the integrator CAMERA_BATCH at a time, so that
+                    // their camera rays are traced together (one Embree packet).
+                    let mut sample_ids = (samples.pass as u32..spp).step_by(samples.passes);
+                    loop {
+                        let mut ids = [0u32; CAMERA_BATCH];
+                        let n = ids
+                            .iter_mut()
+                            .zip(sample_ids.by_ref())
+                            .map(|(slot, s)| *slot = s)
+                            .count();
+                        if n == 0 {
+                            break;
+                        }
+                        let chunk = &ids[..n];
+                        let mut rays = [Ray::new(origin, [0.0, 1.0, 0.0]); CAMERA_BATCH];
+                        let mut rngs: [Rng; CAMERA_BATCH] =
+                            std::array::from_fn(|_| Rng::keyed(&[]));
+                        for ((&s, ray), rng) in chunk.iter().zip(&mut rays).zip(&mut rngs) {
+                            let b = s as usize % k;
+                            let ((ox, oy), j) = (offsets[b], (s as usize / k) as f64);
+                            let jx = (ox + j * R2.0).fract() as f32;
+                            let jy = (oy + j * R2.1).fract() as f32;
+                            let dir = camera.direction(x as f32 + jx, y as f32 + jy);
+                            *ray = Ray::new(origin, dir.to_array());
+                            *rng = Rng::keyed(&[seed, pixel, s as u64]);
+                        }
+                        let mut ls = [Vec3::ZERO; CAMERA_BATCH];
+                        scene.radiance_camera_batch(
+                            &rays[..n],
                             settings,
-                            &mut rng,
+                            &mut rngs[..n],
                             &mut c,
+                            &mut ls[..n],
                         );
-                        if l.is_finite() {
-                            // With fewer batches kept, the k sequences fold onto them.
-                            acc.add(b % keep.max(1), l);
-                        } else {
-                            c.nan += 1;
+                        for (&s, &l) in chunk.iter().zip(&ls) {
+                            if l.is_finite() {
+                                // With fewer batches kept, the k sequences fold onto them.
+                                acc.add(s as usize % k % keep.max(1), l);
+                            } else {
+                                c.nan += 1;
+                            }
                         }
                     }
                     acc

@@ -210,6 +210,9 @@ pub fn highest_vertex_y(mesh: &Mesh) -> Option<f32> {
         .reduce_with(f32::max)
 }
 
+/// Most camera rays [`SceneRef::radiance_camera_batch`] takes at once: one Embree packet.
+pub const CAMERA_BATCH: usize = 16;
+
 /// What the integrator traces against.
 pub struct SceneRef<'a> {
     pub accel: &'a dyn Accel,
@@ -397,6 +400,45 @@ impl SceneRef<'_> {
         self.radiance_from(ray, None, in_water, segment, settings, rng, c)
     }
 
+    /// Radiance along camera rays (in the air, first segment), bit for bit what
+    /// [`Self::radiance`] gives each (and the same counts), with the rays that need the BVH
+    /// handed to it together: Embree traces them as packets of 16, and one pixel's samples,
+    /// all but parallel, make a coherent packet. At most [`CAMERA_BATCH`] rays; `rngs[i]` is
+    /// ray i's generator and `out[i]` receives its radiance.
+    pub fn radiance_camera_batch(
+        &self,
+        rays: &[Ray],
+        settings: &TraceSettings,
+        rngs: &mut [Rng],
+        c: &mut Counters,
+        out: &mut [Vec3],
+    ) {
+        let n = rays.len();
+        assert!(n <= CAMERA_BATCH && rngs.len() == n && out.len() == n);
+        let mut answered = [None; CAMERA_BATCH];
+        let mut traced = [Ray::new([0.0; 3], [0.0, 1.0, 0.0]); CAMERA_BATCH];
+        let mut m = 0;
+        for (i, ray) in rays.iter().enumerate() {
+            answered[i] = self.answer_untraced(ray, false, 0, settings, c);
+            if answered[i].is_none() {
+                traced[m] = *ray;
+                m += 1;
+            }
+        }
+        let mut hits = [None; CAMERA_BATCH];
+        self.accel.intersect_many(&traced[..m], &mut hits[..m]);
+        let mut hits = hits[..m].iter();
+        for (i, ray) in rays.iter().enumerate() {
+            out[i] = match answered[i] {
+                Some(l) => l,
+                None => {
+                    let hit = *hits.next().expect("one hit per traced ray");
+                    self.radiance_given(ray, None, false, 0, hit, settings, &mut rngs[i], c)
+                }
+            };
+        }
+    }
+
     /// [`Self::radiance`] for a ray spawned on triangle `parent` (counted if it meets it again).
     #[allow(clippy::too_many_arguments)]
     fn radiance_from(
@@ -409,9 +451,26 @@ impl SceneRef<'_> {
         rng: &mut Rng,
         c: &mut Counters,
     ) -> Vec3 {
+        if let Some(l) = self.answer_untraced(ray, in_water, segment, settings, c) {
+            return l;
+        }
+        let hit = self.accel.intersect(ray);
+        self.radiance_given(ray, parent, in_water, segment, hit, settings, rng, c)
+    }
+
+    /// The radiance of a ray answered without the BVH: cut at `max_segments`, or known to
+    /// miss the surface (the skip shortcuts). `None` when it must be traced, which is counted.
+    fn answer_untraced(
+        &self,
+        ray: &Ray,
+        in_water: bool,
+        segment: u32,
+        settings: &TraceSettings,
+        c: &mut Counters,
+    ) -> Option<Vec3> {
         if segment >= settings.max_segments {
             c.truncated += 1;
-            return Vec3::ZERO;
+            return Some(Vec3::ZERO);
         }
         let d = Vec3::from(ray.dir);
         if in_water
@@ -420,7 +479,7 @@ impl SceneRef<'_> {
             && -d.y > slope * (d.x * d.x + d.z * d.z).sqrt()
         {
             c.skipped += 1;
-            return Vec3::from(settings.upwelling);
+            return Some(Vec3::from(settings.upwelling));
         }
         if !in_water
             && d.y >= 0.0
@@ -428,10 +487,27 @@ impl SceneRef<'_> {
             && ray.org[1] > top
         {
             c.skipped_above += 1;
-            return self.sky.radiance(Vec3::from(ray.org), d);
+            return Some(self.sky.radiance(Vec3::from(ray.org), d));
         }
         c.rays += 1;
-        let Some(hit) = self.accel.intersect(ray) else {
+        None
+    }
+
+    /// The radiance of a traced ray given its closest hit.
+    #[allow(clippy::too_many_arguments)]
+    fn radiance_given(
+        &self,
+        ray: &Ray,
+        parent: Option<u32>,
+        in_water: bool,
+        segment: u32,
+        hit: Option<Hit>,
+        settings: &TraceSettings,
+        rng: &mut Rng,
+        c: &mut Counters,
+    ) -> Vec3 {
+        let d = Vec3::from(ray.dir);
+        let Some(hit) = hit else {
             if segment == 0 && !in_water && d.y < settings.must_hit_below_y {
                 c.escaped_below_horizon += 1;
             }
