@@ -129,8 +129,10 @@ impl AnalyticSky {
                 let horizon = Vec3::new(0.95, 0.9, 0.85);
                 let base = horizon.lerp(zenith, 1.0 - (-up / 0.12).exp());
                 // Forward-scattering glow around the sun, stronger for a low sun.
-                let glow = Vec3::new(1.0, 0.75, 0.45)
-                    * (3.0 * (-gamma / 0.12).exp() + 0.6 * (-gamma / 0.6).exp());
+                // exp(-gamma / 0.12) is the fifth power of exp(-gamma / 0.6): one exp, not two.
+                let e = (-gamma / 0.6).exp();
+                let e2 = e * e;
+                let glow = Vec3::new(1.0, 0.75, 0.45) * (3.0 * (e2 * e2 * e) + 0.6 * e);
                 // Light low in the sky drops towards the horizon below a low sun (reddened).
                 sky_scale * (base + glow * (1.0 - 0.7 * sun.y.max(0.0)))
             }
@@ -188,9 +190,12 @@ impl Sky {
     /// Radiance arriving along `-dir` at a ray that left `org` (camera-relative metres, y above
     /// the sea level at the camera's nadir) and hit nothing.
     pub fn radiance(&self, org: Vec3, dir: Vec3) -> Vec3 {
+        // From the camera itself the dome is seen along the ray: the camera's rays need no
+        // intersection with it (half of every image looks at the sky).
+        let from_camera = org == Vec3::new(0.0, self.camera_height_m as f32, 0.0);
         let d = match self.dome_altitude_m {
-            None => dir,
-            Some(alt) => self.dome_direction(org, dir, alt),
+            Some(alt) if !from_camera => self.dome_direction(org, dir, alt),
+            _ => dir,
         };
         self.scale
             * match &self.source {
