@@ -158,8 +158,8 @@ fn decide(ids: &mut [PrimRef], b: &Aabb, cb: &Aabb) -> Decision {
         return median_split(ids);
     }
     match map.count {
-        ..=4 => decide_binned::<4>(ids, b, &map),
-        ..=8 => decide_binned::<8>(ids, b, &map),
+        0..=4 => decide_binned::<4>(ids, b, &map),
+        5..=8 => decide_binned::<8>(ids, b, &map),
         _ => decide_binned::<BINS>(ids, b, &map),
     }
 }

@@ -61,9 +61,9 @@ impl Aabb {
     };
     #[inline]
     pub(super) fn grow(&mut self, p: [f32; 3]) {
-        for k in 0..3 {
-            self.lo[k] = fmin(self.lo[k], p[k]);
-            self.hi[k] = fmax(self.hi[k], p[k]);
+        for (k, c) in p.into_iter().enumerate() {
+            self.lo[k] = fmin(self.lo[k], c);
+            self.hi[k] = fmax(self.hi[k], c);
         }
     }
     #[inline]
