@@ -212,6 +212,9 @@ pub fn highest_vertex_y(mesh: &Mesh) -> Option<f32> {
 
 /// Most camera rays [`SceneRef::radiance_camera_batch`] takes at once: one Embree packet.
 pub const CAMERA_BATCH: usize = 16;
+/// Fewer rays than this are traced one by one: a packet of 16 lanes carrying one ray was 12 %
+/// slower than single rays (default scene at 1 spp), carrying four 9 % faster.
+const PACKET_MIN: usize = 2;
 
 /// What the integrator traces against.
 pub struct SceneRef<'a> {
@@ -426,7 +429,13 @@ impl SceneRef<'_> {
             }
         }
         let mut hits = [None; CAMERA_BATCH];
-        self.accel.intersect_many(&traced[..m], &mut hits[..m]);
+        if m >= PACKET_MIN {
+            self.accel.intersect_many(&traced[..m], &mut hits[..m]);
+        } else {
+            for (h, r) in hits.iter_mut().zip(&traced[..m]) {
+                *h = self.accel.intersect(r);
+            }
+        }
         let mut hits = hits[..m].iter();
         for (i, ray) in rays.iter().enumerate() {
             out[i] = match answered[i] {
