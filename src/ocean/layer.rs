@@ -64,7 +64,13 @@ pub type Texel = [f32; FIELD_COUNT];
 /// all that a normal needs.
 pub const SLOPES: std::ops::Range<usize> = field::DH_DX..FIELD_COUNT;
 /// The five derivative fields at one point, in [`field`] order from [`field::DH_DX`].
-pub type Slopes = [f32; 5];
+pub type Slopes = [f32; FIELD_COUNT - field::DH_DX];
+
+/// The derivative fields of a texel (or of summed fields).
+#[inline]
+pub fn slopes(t: &Texel) -> Slopes {
+    std::array::from_fn(|i| t[SLOPES.start + i])
+}
 
 type C32 = Complex<f32>;
 

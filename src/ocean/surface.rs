@@ -19,7 +19,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::layer::{FIELD_COUNT, Layer, SLOPES, Slopes, Texel, field};
+use super::layer::{FIELD_COUNT, Layer, SLOPES, Slopes, Texel, field, slopes};
 use super::spectrum::Spectrum;
 use super::{Interp, MAX_LAYERS, OceanError, OceanParams, SpectrumKind, SpreadingKind};
 
@@ -64,7 +64,7 @@ impl Sample {
     /// From the summed fields of all layers.
     #[inline]
     pub fn from_fields(f: &Texel) -> Sample {
-        let (normal, jacobian) = normal_from_slopes(f[SLOPES].try_into().expect("five slopes"));
+        let (normal, jacobian) = normal_from_slopes(slopes(f));
         Sample {
             height: f[field::H],
             disp: [f[field::DX], f[field::DZ]],
@@ -121,8 +121,7 @@ impl Sampler<'_> {
     /// the five derivatives was scalar code and more instructions (callgrind).
     #[inline]
     pub fn normal(&self, u: f32, v: f32) -> [f32; 3] {
-        let f = self.fields(u, v);
-        normal_from_slopes(f[SLOPES].try_into().expect("five slopes")).0
+        normal_from_slopes(slopes(&self.fields(u, v))).0
     }
 
     /// The eight summed fields at (u, v), in [`field`] order.

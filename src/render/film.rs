@@ -321,11 +321,11 @@ pub fn render_image_samples(
                     let mut sample_ids = (samples.pass as u32..spp).step_by(samples.passes);
                     loop {
                         let mut ids = [0u32; CAMERA_BATCH];
-                        let n = ids
-                            .iter_mut()
-                            .zip(sample_ids.by_ref())
-                            .map(|(slot, s)| *slot = s)
-                            .count();
+                        let mut n = 0;
+                        for s in sample_ids.by_ref().take(CAMERA_BATCH) {
+                            ids[n] = s;
+                            n += 1;
+                        }
                         if n == 0 {
                             break;
                         }

@@ -93,7 +93,8 @@ pub struct Counters {
     /// Rays in the water known not to meet the surface again, so not traced.
     pub skipped: u64,
     /// Rays leaving upwards from above the mesh's highest vertex, so never meeting it: not
-    /// traced (the camera's upper half, for one).
+    /// traced (the camera's upper half, for one). Absent from pass files written before it.
+    #[serde(default)]
     pub skipped_above: u64,
     /// Mapped-normal evaluations, and the nanoseconds spent in the timed 1-in-64 of them.
     pub normal_evals: u64,
@@ -137,7 +138,7 @@ impl Counters {
 /// times. Measured once per process as the median of 1001 empty intervals timed exactly as the
 /// mapped normals are. About 24 ns here, a quarter of what a mapped normal read with it, so
 /// leaving it in overstated normal mapping's share of the trace by a fifth.
-pub fn clock_overhead_ns() -> f64 {
+pub(crate) fn clock_overhead_ns() -> f64 {
     static OVERHEAD: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
     *OVERHEAD.get_or_init(|| {
         let mut v: Vec<u64> = (0..1001)
@@ -490,10 +491,12 @@ impl SceneRef<'_> {
             c.skipped += 1;
             return Some(Vec3::from(settings.upwelling));
         }
+        // (A ray with a NaN or infinite component is left to the backend, which counts it.)
         if !in_water
             && d.y >= 0.0
             && let Some(top) = self.skip_above_y
             && ray.org[1] > top
+            && ray.is_finite()
         {
             c.skipped_above += 1;
             return Some(self.sky.radiance(Vec3::from(ray.org), d));

@@ -194,6 +194,11 @@ pub struct RenderReport {
     /// Steepest descent slope of the mesh; rays in the water steeper than it are not traced.
     pub skip_slope: Option<f32>,
     pub skipped_rays: u64,
+    /// The mesh's highest vertex; rays leaving upwards from above it are not traced.
+    #[serde(default)]
+    pub skip_above_y: Option<f32>,
+    #[serde(default)]
+    pub skipped_above_rays: u64,
     /// Downwelling irradiance of the sky and the water-leaving radiance it gives (R_rs x E_d).
     pub sky_irradiance: [f32; 3],
     pub upwelling: [f32; 3],
@@ -306,8 +311,8 @@ fn prepare_built(cfg: &SceneConfig, refittable: bool) -> Result<Prepared, Render
             let (mesh, stats) = tessellate(&lod, &ocean.sampler(cfg.camera.position_m))?;
             Ok((ocean, seconds_ocean, mesh, stats, t.elapsed().as_secs_f64()))
         })?;
-    let skip_slope = max_descent_slope(&mesh);
-    let skip_above_y = highest_vertex_y(&mesh);
+    let (skip_slope, skip_above_y) =
+        pool.install(|| (max_descent_slope(&mesh), highest_vertex_y(&mesh)));
     let mesh = Arc::new(mesh);
     let (accel, seconds_build, embree_version): (Box<dyn Accel>, f64, Option<String>) =
         match cfg.render.backend {
@@ -410,8 +415,10 @@ impl Prepared {
                 message,
             })?;
         drop((positions, normals));
-        self.skip_slope = max_descent_slope(self.accel.mesh());
-        self.skip_above_y = highest_vertex_y(self.accel.mesh());
+        let mesh = self.accel.mesh();
+        (self.skip_slope, self.skip_above_y) = self
+            .pool
+            .install(|| (max_descent_slope(mesh), highest_vertex_y(mesh)));
         let seconds_geometry = t.elapsed().as_secs_f64() - seconds_refit;
         Ok(FrameUpdate {
             seconds_ocean,
@@ -562,6 +569,8 @@ impl Prepared {
             truncated_paths: c.truncated,
             skip_slope: self.skip_slope,
             skipped_rays: c.skipped,
+            skip_above_y: self.skip_above_y,
+            skipped_above_rays: c.skipped_above,
             sky_irradiance: self.sky_irradiance.to_array(),
             upwelling: cfg.water.upwelling(self.sky_irradiance).to_array(),
             counters: c,

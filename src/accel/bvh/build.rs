@@ -34,9 +34,10 @@ const EMPTY_BIN: Bin = Bin {
     count: 0,
 };
 
-/// Bins of all three axes; `N` is [`BINS`] or, for small nodes, fewer (see [`decide`]): a
-/// node's bins are cleared, filled and swept once, so their number, not the triangles, is most
-/// of a small node's cost.
+/// Bins of all three axes; `N` is [`BINS`] or, for small nodes, 4 or 8 (the smallest that holds
+/// the bins in use, see [`decide`]). The sweep always stopped at the bins in use; what a smaller
+/// `N` saves is clearing 16 bins per axis and joining them into the two sides, which for a node
+/// of a few triangles cost more than the triangles did.
 type Bins<const N: usize> = [[Bin; N]; 3];
 
 /// Maps a centroid to its bin on each axis; axes with no centroid extent get scale 0. Centroids
@@ -65,18 +66,17 @@ impl BinMap {
             count,
         }
     }
-    /// The bins of `r` on the three axes, computed together (one 4-wide subtract and
-    /// multiply). The float-to-int cast saturates, so rounding past either end stays in range.
-    #[inline]
-    fn bins(&self, r: &PrimRef) -> [usize; 3] {
-        let c = r.centroid2();
-        let t: [f32; 4] = std::array::from_fn(|k| (c[k] - self.lo[k]) * self.scale[k]);
-        std::array::from_fn(|k| (t[k] as usize).min(self.count - 1))
-    }
+    /// The bin of `r` on axis `k`. The float-to-int cast saturates, so rounding past either
+    /// end stays in range.
     #[inline]
     fn bin(&self, r: &PrimRef, k: usize) -> usize {
         let c = r.centroid2();
         (((c[k] - self.lo[k]) * self.scale[k]) as usize).min(self.count - 1)
+    }
+    /// [`Self::bin`] on the three axes.
+    #[inline]
+    fn bins(&self, r: &PrimRef) -> [usize; 3] {
+        std::array::from_fn(|k| self.bin(r, k))
     }
 }
 
@@ -314,6 +314,8 @@ fn build_parallel(ids: &mut [PrimRef], offset: usize, bc: (Aabb, Aabb)) -> Upper
         return Upper::Subtree { nodes, depth };
     }
     match decide(ids, &bc.0, &bc.1) {
+        // Unreachable above PARALLEL_MIN (`decide` makes leaves of at most MAX_LEAF triangles);
+        // handled rather than asserted so that `decide` alone owns the leaf rule.
         Decision::Leaf => Upper::Subtree {
             nodes: vec![Node::new(&bc.0, offset, n)],
             depth: 1,

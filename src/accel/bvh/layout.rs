@@ -43,10 +43,10 @@ fn fmax(a: f32, b: f32) -> f32 {
     if a > b { a } else { b }
 }
 
-/// A box with a fourth, unused lane on each corner, so that joining two boxes or growing one by
-/// a point is one 4-wide min and max (LLVM vectorises the fixed-size loops): the build does little
-/// else. The fourth lane holds whatever the boxes joined held there (see `PrimRef`); nothing
-/// reads it.
+/// A box with a fourth lane on each corner, so that joining two boxes is one 4-wide min and max
+/// (LLVM vectorises the fixed-size loop): the build does little else. A primitive reference
+/// keeps its triangle's id in its own box's fourth lane (see `PrimRef`); in boxes joined from
+/// others the lane holds whatever min and max made of it, and nothing reads it.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(16))]
 pub(super) struct Aabb {

@@ -1,5 +1,5 @@
 //! A bounding volume hierarchy in safe Rust, the backend named "rust": a binned SAH build
-//! (16 bins over centroid bounds, Wald 2007) parallelised with `rayon::join`, 32-byte nodes
+//! (up to 16 bins over centroid bounds, Wald 2007) parallelised with `rayon::join`, 32-byte nodes
 //! with their two children adjacent, leaves of up to four triangles whose vertices are copied
 //! into leaf order, and the watertight ray/triangle test of Woop, Benthin & Wald, "Watertight
 //! Ray/Triangle Intersection", JCGT 2(1), 2013, with its f64 fallback for edge functions that
