@@ -1,13 +1,15 @@
 //! The build: binned SAH (up to 16 bins over centroid bounds, Wald 2007) on 32-byte primitive
 //! references (4-wide boxes, Embree's layout) partitioned in place without branches, the top
 //! levels split across threads with `rayon::join` (and binning of the largest nodes across
-//! chunks), then flattened into the sibling-pair layout.
+//! chunks), each thread's subtree collapsed into 4-wide nodes as soon as it is built, and the
+//! top of the tree collapsed over them.
 
 use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::layout::{Aabb, Node, Pair};
+use super::collapse::{collapse, widen};
+use super::layout::{Aabb, LANES, Node, Wide};
 use crate::mesh::Mesh;
 
 /// Most bins per axis in the SAH sweep; 16 is where more bins stop paying for themselves
@@ -262,44 +264,49 @@ fn median_split(ids: &[PrimRef]) -> Decision {
 }
 
 /// Builds the subtree of `ids` (the leaf-order range starting at `offset`) into `nodes`, with
-/// its root written at `slot`; returns the subtree's depth.
+/// its root written at `slot`.
 fn build_serial(
     ids: &mut [PrimRef],
     offset: usize,
     (b, cb): (Aabb, Aabb),
     nodes: &mut Vec<Node>,
     slot: usize,
-) -> usize {
+) {
     match decide(ids, &b, &cb) {
-        Decision::Leaf => {
-            nodes[slot] = Node::new(&b, offset, ids.len());
-            1
-        }
+        Decision::Leaf => nodes[slot] = Node::new(&b, offset, ids.len()),
         Decision::Split { mid, left, right } => {
             let c = nodes.len();
             nodes.extend([Node::default(); 2]);
             nodes[slot] = Node::new(&b, c, 0);
             let (l, r) = ids.split_at_mut(mid);
-            let dl = build_serial(l, offset, left, nodes, c);
-            let dr = build_serial(r, offset + mid, right, nodes, c + 1);
-            1 + dl.max(dr)
+            build_serial(l, offset, left, nodes, c);
+            build_serial(r, offset + mid, right, nodes, c + 1);
         }
     }
 }
 
-/// The parallel top of the tree; below [`PARALLEL_MIN`] triangles each task builds a flat
-/// subtree whose root is its element 0 and whose siblings follow in pairs from element 1.
+/// The parallel top of the tree. Below [`PARALLEL_MIN`] triangles each task builds a binary
+/// subtree (root at element 0, siblings in pairs from element 1) and collapses it into wide
+/// nodes while it is still in cache.
 enum Upper {
     Inner(Aabb, Box<Upper>, Box<Upper>),
-    Subtree { nodes: Vec<Node>, depth: usize },
+    /// A side of at most [`MAX_LEAF`] triangles that stayed a leaf.
+    Leaf(Node),
+    /// Wide nodes indexed from their own root at 0, and their depth.
+    Wide {
+        bounds: Aabb,
+        nodes: Vec<Wide>,
+        depth: usize,
+    },
 }
 
 impl Upper {
-    /// Nodes in the final layout, without the root.
-    fn nodes_below(&self) -> usize {
+    /// At least as many wide nodes as the assembled tree has (an inner node becomes at most one).
+    fn wide_nodes(&self) -> usize {
         match self {
-            Upper::Inner(_, l, r) => 2 + l.nodes_below() + r.nodes_below(),
-            Upper::Subtree { nodes, .. } => nodes.len() - 1,
+            Upper::Inner(_, l, r) => 1 + l.wide_nodes() + r.wide_nodes(),
+            Upper::Leaf(_) => 0,
+            Upper::Wide { nodes, .. } => nodes.len(),
         }
     }
 }
@@ -310,16 +317,21 @@ fn build_parallel(ids: &mut [PrimRef], offset: usize, bc: (Aabb, Aabb)) -> Upper
         // A binary tree over n triangles has fewer than 2n nodes.
         let mut nodes = Vec::with_capacity(2 * n);
         nodes.push(Node::default());
-        let depth = build_serial(ids, offset, bc, &mut nodes, 0);
-        return Upper::Subtree { nodes, depth };
+        build_serial(ids, offset, bc, &mut nodes, 0);
+        if nodes[0].count > 0 {
+            return Upper::Leaf(nodes[0]);
+        }
+        let (nodes, depth) = collapse(&nodes);
+        return Upper::Wide {
+            bounds: bc.0,
+            nodes,
+            depth,
+        };
     }
     match decide(ids, &bc.0, &bc.1) {
         // Unreachable above PARALLEL_MIN (`decide` makes leaves of at most MAX_LEAF triangles);
         // handled rather than asserted so that `decide` alone owns the leaf rule.
-        Decision::Leaf => Upper::Subtree {
-            nodes: vec![Node::new(&bc.0, offset, n)],
-            depth: 1,
-        },
+        Decision::Leaf => Upper::Leaf(Node::new(&bc.0, offset, n)),
         Decision::Split { mid, left, right } => {
             let (l, r) = ids.split_at_mut(mid);
             let (l, r) = rayon::join(
@@ -331,42 +343,60 @@ fn build_parallel(ids: &mut [PrimRef], offset: usize, bc: (Aabb, Aabb)) -> Upper
     }
 }
 
-/// Appends `up` to `pairs` in final layout, its root written at node `slot`; returns its depth.
-fn flatten(up: Upper, pairs: &mut Vec<Pair>, slot: usize) -> usize {
-    let set = |pairs: &mut Vec<Pair>, i: usize, n: Node| pairs[i / 2].0[i % 2] = n;
-    match up {
-        Upper::Subtree { nodes, depth } => {
-            // Local child indices start at 1 (0 is the root, which goes to `slot`).
-            let base = 2 * pairs.len() as u32;
-            let relocate = |mut n: Node| {
-                if n.count == 0 {
-                    n.index = n.index - 1 + base;
-                }
-                n
-            };
-            set(pairs, slot, relocate(nodes[0]));
-            pairs.extend(
-                nodes[1..]
-                    .chunks_exact(2)
-                    .map(|c| Pair([relocate(c[0]), relocate(c[1])])),
-            );
-            depth
-        }
-        Upper::Inner(b, l, r) => {
-            let c = 2 * pairs.len();
-            pairs.push(Pair::default());
-            set(pairs, slot, Node::new(&b, c, 0));
-            let dl = flatten(*l, pairs, c);
-            let dr = flatten(*r, pairs, c + 1);
-            1 + dl.max(dr)
+/// Writes the wide node for `up` (an [`Upper::Inner`]) at `slot` of `out`, appending its
+/// descendants after it (the collapsed subtrees relocated by their offset); returns its depth.
+fn assemble(up: &Upper, out: &mut Vec<Wide>, slot: usize) -> usize {
+    let Upper::Inner(_, l, r) = up else {
+        unreachable!("only inner nodes are assembled")
+    };
+    let (kids, n) = widen(
+        [&**l, &**r],
+        |u| match u {
+            Upper::Inner(b, ..) => Some(b.half_area()),
+            _ => None,
+        },
+        |u| match u {
+            Upper::Inner(_, l, r) => [&**l, &**r],
+            _ => unreachable!("`widen` opens only the children it has an area for"),
+        },
+    );
+    let mut below = 0;
+    for (lane, kid) in kids[..n].iter().enumerate() {
+        match kid {
+            Upper::Leaf(leaf) => out[slot].set(lane, (leaf.lo, leaf.hi), leaf.index, leaf.count),
+            Upper::Wide {
+                bounds,
+                nodes,
+                depth,
+            } => {
+                let base = out.len() as u32;
+                out[slot].set(lane, bounds.corners(), base, 0);
+                out.extend(nodes.iter().map(|w| {
+                    let mut w = *w;
+                    for l in 0..LANES {
+                        if w.count[l] == 0 && w.index[l] != Wide::NONE {
+                            w.index[l] += base;
+                        }
+                    }
+                    w
+                }));
+                below = below.max(*depth);
+            }
+            Upper::Inner(b, ..) => {
+                let s = out.len();
+                out.push(Wide::EMPTY);
+                out[slot].set(lane, b.corners(), s as u32, 0);
+                below = below.max(assemble(kid, out, s));
+            }
         }
     }
+    1 + below
 }
 
-/// The built tree: sibling pairs (node 0 the root, node 1 padding), the triangle ids in leaf
-/// order and the depth (levels from the root to the deepest leaf).
+/// The built tree: 4-wide nodes (root first, every node's children after it), the triangle ids
+/// in leaf order, and the depth in wide nodes from the root to the deepest leaf.
 pub(super) struct Built {
-    pub(super) pairs: Vec<Pair>,
+    pub(super) nodes: Vec<Wide>,
     pub(super) ids: Vec<u32>,
     pub(super) depth: usize,
 }
@@ -400,11 +430,20 @@ pub(super) fn build_nodes(mesh: &Arc<Mesh>) -> Built {
                 (b, cb)
             },
         );
-    let upper = build_parallel(&mut refs, 0, (b, cb));
-    // Root and padding first: from there on nodes are appended in pairs, at even indices.
-    let mut pairs = Vec::with_capacity(1 + upper.nodes_below() / 2);
-    pairs.push(Pair::default());
-    let depth = flatten(upper, &mut pairs, 0);
+    let (nodes, depth) = match build_parallel(&mut refs, 0, (b, cb)) {
+        Upper::Leaf(leaf) => {
+            let mut root = Wide::EMPTY;
+            root.set(0, (leaf.lo, leaf.hi), leaf.index, leaf.count);
+            (vec![root], 1)
+        }
+        Upper::Wide { nodes, depth, .. } => (nodes, depth),
+        inner => {
+            let mut nodes = Vec::with_capacity(inner.wide_nodes());
+            nodes.push(Wide::EMPTY);
+            let depth = assemble(&inner, &mut nodes, 0);
+            (nodes, depth)
+        }
+    };
     let ids = refs.par_iter().map(PrimRef::id).collect();
-    Built { pairs, ids, depth }
+    Built { nodes, ids, depth }
 }

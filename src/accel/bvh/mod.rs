@@ -1,7 +1,8 @@
 //! A bounding volume hierarchy in safe Rust, the backend named "rust": a binned SAH build
-//! (up to 16 bins over centroid bounds, Wald 2007) parallelised with `rayon::join`, 32-byte nodes
-//! with their two children adjacent, leaves of up to four triangles whose vertices are copied
-//! into leaf order, and the watertight ray/triangle test of Woop, Benthin & Wald, "Watertight
+//! (up to 16 bins over centroid bounds, Wald 2007) parallelised with `rayon::join` into a binary
+//! tree, collapsed into 4-wide nodes whose four child boxes a ray meets in one set of vector
+//! instructions, leaves of up to four triangles whose vertices are copied into leaf order, and
+//! the watertight ray/triangle test of Woop, Benthin & Wald, "Watertight
 //! Ray/Triangle Intersection", JCGT 2(1), 2013, with its f64 fallback for edge functions that
 //! round to zero. Boxes are tested with the slab method made robust as in Ize, "Robust BVH Ray
 //! Traversal", JCGT 2(2), 2013: far distances grow by `1 + 2·gamma(3)`, and a zero direction
@@ -10,9 +11,11 @@
 //! cannot tell this backend from Embree.
 
 //!
-//! [`build`] makes the tree, [`layout`] is its memory layout, [`traverse`] walks it.
+//! [`build`] makes the tree (binary, then collapsed into 4-wide nodes by [`collapse`]),
+//! [`layout`] is its memory layout, [`traverse`] walks it.
 
 mod build;
+mod collapse;
 mod layout;
 mod traverse;
 
@@ -23,15 +26,14 @@ use std::time::Instant;
 use super::{Accel, Hit, Ray};
 use crate::mesh::Mesh;
 pub use build::MAX_LEAF;
-use layout::{Node, Pair};
+use layout::{LANES, Wide};
 pub use traverse::intersect_triangle;
 
 /// The Rust BVH over one mesh.
 pub struct Bvh {
     mesh: Arc<Mesh>,
-    /// Node `i` is `nodes[i / 2].0[i % 2]`; the root is node 0 and node 1 is padding, so every
-    /// sibling pair starts at an even index.
-    nodes: Vec<Pair>,
+    /// 4-wide nodes, the root first and every node's children after it.
+    nodes: Vec<Wide>,
     /// Triangle corners in leaf order, so a leaf's triangles are contiguous in memory.
     tris: Vec<[[f32; 3]; 3]>,
     /// Original triangle index of each entry of `tris`.
@@ -47,11 +49,11 @@ impl Bvh {
     pub fn build(mesh: Arc<Mesh>) -> Bvh {
         use rayon::prelude::*;
         let start = Instant::now();
-        let build::Built { pairs, ids, depth } = build::build_nodes(&mesh);
+        let build::Built { nodes, ids, depth } = build::build_nodes(&mesh);
         let tris: Vec<[[f32; 3]; 3]> = ids.par_iter().map(|&p| mesh.triangle(p)).collect();
         Bvh {
             mesh,
-            nodes: pairs,
+            nodes,
             tris,
             prims: ids,
             depth,
@@ -84,7 +86,7 @@ impl Bvh {
             .par_iter_mut()
             .zip(&self.prims)
             .for_each(|(t, &p)| *t = mesh.triangle(p));
-        refit_node(&mut self.nodes, &self.tris, 0);
+        refit_wide(&mut self.nodes, &self.tris, 0);
         Ok(start.elapsed().as_secs_f64())
     }
 
@@ -95,12 +97,12 @@ impl Bvh {
             + std::mem::size_of_val(self.prims.as_slice())
     }
 
+    /// Wide nodes (each with up to four children).
     pub fn node_count(&self) -> usize {
-        // Without the padding node.
-        2 * self.nodes.len() - 1
+        self.nodes.len()
     }
 
-    /// Levels from the root to the deepest leaf (a lone leaf has depth 1).
+    /// Wide nodes on the longest path from the root to a leaf (a lone leaf has depth 1).
     pub fn depth(&self) -> usize {
         self.depth
     }
@@ -120,43 +122,56 @@ impl Bvh {
         ok
     }
 
-    /// Checks the structure: every triangle in exactly one leaf, leaves of 1 to
-    /// [`MAX_LEAF`] triangles, every node's box enclosing its children or triangles, the depth
-    /// the build recorded (which sizes the traversal stack) the tree's. For tests.
+    /// Checks the structure: every triangle in exactly one leaf, leaves of 1 to [`MAX_LEAF`]
+    /// triangles, every lane's box enclosing its child's boxes or triangles and an empty lane's
+    /// box empty, children stored after their parents, the depth recorded (which sizes the
+    /// traversal stack) the tree's. For tests.
     pub fn validate(&self) -> Result<(), String> {
         let mut seen = vec![false; self.tris.len()];
         let mut todo = vec![(0usize, 1usize)];
         let mut deepest = 0;
-        let inside = |outer: &Node, lo: [f32; 3], hi: [f32; 3]| {
-            (0..3).all(|k| outer.lo[k] <= lo[k] && hi[k] <= outer.hi[k])
+        let inside = |(lo, hi): ([f32; 3], [f32; 3]), p: [f32; 3], q: [f32; 3]| {
+            (0..3).all(|k| lo[k] <= p[k] && q[k] <= hi[k])
         };
         while let Some((i, depth)) = todo.pop() {
             deepest = deepest.max(depth);
-            let n = self.node(i);
-            if n.count == 0 {
-                let c = n.index as usize;
-                if c <= i || !c.is_multiple_of(2) || c + 1 >= 2 * self.nodes.len() {
-                    return Err(format!("node {i} has children at {c}"));
-                }
-                for ch in [c, c + 1] {
-                    if !inside(n, self.node(ch).lo, self.node(ch).hi) {
-                        return Err(format!("child {ch} sticks out of node {i}"));
+            let w = &self.nodes[i];
+            for l in 0..LANES {
+                let (index, count, lane) = (w.index[l], w.count[l], w.lane(l));
+                if index == Wide::NONE {
+                    if count != 0 || lane != Wide::EMPTY.lane(0) {
+                        return Err(format!("empty lane {l} of node {i} is not empty"));
                     }
-                    todo.push((ch, depth + 1));
-                }
-            } else {
-                if n.count as usize > MAX_LEAF {
-                    return Err(format!("leaf {i} holds {} triangles", n.count));
-                }
-                for t in (n.index..n.index + n.count).map(|t| t as usize) {
-                    if std::mem::replace(&mut seen[t], true) {
-                        return Err(format!("triangle slot {t} is in two leaves"));
+                } else if count == 0 {
+                    let c = index as usize;
+                    if c <= i || c >= self.nodes.len() {
+                        return Err(format!("node {i} has a child at {c}"));
                     }
-                    if self.tris[t] != self.mesh.triangle(self.prims[t]) {
-                        return Err(format!("triangle slot {t} is not a copy of its prim"));
+                    let child = &self.nodes[c];
+                    if child.index.iter().all(|&m| m == Wide::NONE) {
+                        return Err(format!("node {c} has no children"));
                     }
-                    if self.tris[t].iter().any(|&v| !inside(n, v, v)) {
-                        return Err(format!("triangle slot {t} sticks out of leaf {i}"));
+                    for m in (0..LANES).filter(|&m| child.index[m] != Wide::NONE) {
+                        let (lo, hi) = child.lane(m);
+                        if !inside(lane, lo, hi) {
+                            return Err(format!("lane {m} of node {c} sticks out of node {i}"));
+                        }
+                    }
+                    todo.push((c, depth + 1));
+                } else {
+                    if count as usize > MAX_LEAF {
+                        return Err(format!("a leaf of node {i} holds {count} triangles"));
+                    }
+                    for t in (index..index + count).map(|t| t as usize) {
+                        if t >= self.tris.len() || std::mem::replace(&mut seen[t], true) {
+                            return Err(format!("triangle slot {t} is in two leaves or none"));
+                        }
+                        if self.tris[t] != self.mesh.triangle(self.prims[t]) {
+                            return Err(format!("triangle slot {t} is not a copy of its prim"));
+                        }
+                        if self.tris[t].iter().any(|&v| !inside(lane, v, v)) {
+                            return Err(format!("triangle slot {t} sticks out of node {i}"));
+                        }
                     }
                 }
             }
@@ -171,29 +186,29 @@ impl Bvh {
         }
         Ok(())
     }
-
-    #[inline(always)]
-    fn node(&self, i: usize) -> &Node {
-        &self.nodes[i / 2].0[i % 2]
-    }
 }
 
-/// Recomputes the bounds of node `i` and everything under it; returns its box.
-fn refit_node(nodes: &mut [Pair], tris: &[[[f32; 3]; 3]], i: usize) -> layout::Aabb {
-    let n = nodes[i / 2].0[i % 2];
-    let mut b = layout::Aabb::EMPTY;
-    if n.count == 0 {
-        let c = n.index as usize;
-        b.join(&refit_node(nodes, tris, c));
-        b.join(&refit_node(nodes, tris, c + 1));
-    } else {
-        for t in &tris[n.index as usize..(n.index + n.count) as usize] {
-            t.iter().for_each(|&v| b.grow(v));
+/// Recomputes the lanes' boxes of wide node `i` and everything under it; returns their union.
+fn refit_wide(nodes: &mut [Wide], tris: &[[[f32; 3]; 3]], i: usize) -> layout::Aabb {
+    let mut all = layout::Aabb::EMPTY;
+    for l in 0..LANES {
+        let (index, count) = (nodes[i].index[l], nodes[i].count[l]);
+        if index == Wide::NONE {
+            continue;
         }
+        let b = if count == 0 {
+            refit_wide(nodes, tris, index as usize)
+        } else {
+            let mut b = layout::Aabb::EMPTY;
+            for t in &tris[index as usize..(index + count) as usize] {
+                t.iter().for_each(|&v| b.grow(v));
+            }
+            b
+        };
+        nodes[i].set(l, b.corners(), index, count);
+        all.join(&b);
     }
-    let node = &mut nodes[i / 2].0[i % 2];
-    (node.lo, node.hi) = b.corners();
-    b
+    all
 }
 
 impl Accel for Bvh {
@@ -231,7 +246,7 @@ impl Accel for Bvh {
 
 #[cfg(test)]
 mod tests {
-    use super::layout::Node;
+    use super::layout::Wide;
     use super::traverse::Prepared;
     use super::*;
 
@@ -285,31 +300,42 @@ mod tests {
     fn grid_tree_is_well_formed() {
         let bvh = Bvh::build(Arc::new(Mesh::grid(150, 100, 0.5)));
         bvh.validate().unwrap();
-        // Leaves of up to 4 triangles over 30 000 triangles: at least 7 500 leaves.
-        assert!(bvh.node_count() >= 2 * 7_500 - 1, "{}", bvh.node_count());
-        assert!(bvh.depth() < 40, "depth {}", bvh.depth());
+        // Leaves of up to 4 triangles over 30 000 triangles: at least 7 500 leaves, which take
+        // (7 500 - 1) / 3 nodes of four children at least.
+        assert!(bvh.node_count() >= 2_500, "{}", bvh.node_count());
+        // The collapse fills the lanes: without it every node would hold two children.
+        let lanes = bvh
+            .nodes
+            .iter()
+            .flat_map(|w| w.index)
+            .filter(|&i| i != Wide::NONE);
+        let per_node = lanes.count() as f64 / bvh.node_count() as f64;
+        assert!(per_node > 2.5, "{per_node} children per node");
+        assert!(bvh.depth() < 20, "depth {}", bvh.depth());
         assert!(bvh.build_seconds() > 0.0);
     }
 
     #[test]
     fn slab_ignores_nan_from_rays_in_a_slab_plane() {
-        // A flat box in y = 0 and rays running exactly along its faces, with -0 components.
-        let n = Node {
-            lo: [0.0, 0.0, 0.0],
-            count: 1,
-            hi: [1.0, 0.0, 1.0],
-            index: 0,
-        };
+        // A flat box in y = 0 in lane 1 and rays running exactly along its faces, with -0
+        // components; the other lanes are empty and must never be entered.
+        let mut n = Wide::EMPTY;
+        n.set(1, ([0.0, 0.0, 0.0], [1.0, 0.0, 1.0]), 0, 1);
         for (org, dir) in [
             ([0.0, 1.0, 0.5], [-0.0, -1.0, 0.0]),
             ([1.0, 1.0, 1.0], [0.0, -1.0, -0.0]),
             ([-1.0, 0.0, 0.0], [1.0, -0.0, 0.0]),
             ([0.5, 0.0, 2.0], [-0.0, 0.0, -1.0]),
+            ([0.5, 0.0, 2.0], [-0.0, -0.0, -1.0]),
         ] {
             let p = Prepared::new(&Ray::new(org, dir)).unwrap();
-            assert!(p.slab(&n, f32::INFINITY).is_some(), "{org:?} {dir:?}");
+            assert_eq!(p.slabs(&n, f32::INFINITY).1, 0b10, "{org:?} {dir:?}");
         }
         let p = Prepared::new(&Ray::new([1.5, 1.0, 0.5], [0.0, -1.0, 0.0])).unwrap();
-        assert!(p.slab(&n, f32::INFINITY).is_none());
+        assert_eq!(p.slabs(&n, f32::INFINITY).1, 0);
+        // Stopping short of the box misses it too.
+        let p = Prepared::new(&Ray::new([0.5, 1.0, 0.5], [0.0, -1.0, 0.0])).unwrap();
+        assert_eq!(p.slabs(&n, 0.5).1, 0);
+        assert_eq!(p.slabs(&n, 1.0).1, 0b10);
     }
 }

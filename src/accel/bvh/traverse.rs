@@ -1,17 +1,18 @@
 //! Traversal: the robust slab test of Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013 (far
 //! distances grow by `1 + 2·gamma(3)`; a zero direction component gives an infinite inverse
-//! whose NaN products are discarded, never propagated), nearest child first with a short
-//! stack, and the watertight ray/triangle test of Woop, Benthin & Wald, JCGT 2(1), 2013, with
+//! whose NaN products are discarded, never propagated) on the four lanes of a wide node at
+//! once, nearest child first with a short stack, and the watertight ray/triangle test of Woop, Benthin & Wald, JCGT 2(1), 2013, with
 //! its f64 fallback for edge functions that round to zero and pbrt-v4's conservative bound that
 //! refuses hits whose t rounding cannot tell from zero.
 
 use super::Bvh;
-use super::layout::Node;
+use super::layout::{LANES, Wide};
 use crate::accel::{Hit, Ray};
 use crate::fp::gamma;
 
-/// Traversal stack kept on the machine stack; deeper trees fall back to a heap stack.
-const INLINE_STACK: usize = 64;
+/// Traversal stack kept on the machine stack (enough for 42 wide levels); deeper trees fall
+/// back to a heap stack.
+const INLINE_STACK: usize = 128;
 /// Ize's factor: enough to cover the rounding in `(bound - org) · inv_dir` for the far plane.
 const FAR_SCALE: f32 = 1.0 + 2.0 * gamma(3.0);
 
@@ -21,6 +22,8 @@ pub(super) struct Prepared {
     org: [f32; 3],
     dir: [f32; 3],
     inv: [f32; 3],
+    /// Per axis, whether the direction is negative: the box's upper plane is then the near one.
+    neg: [bool; 3],
     tnear: f32,
     k: [usize; 3],
     shear: [f32; 3],
@@ -56,30 +59,42 @@ impl Prepared {
             // component, so the NaN from `0 · inf` on a slab plane only ever appears where the
             // slab test below ignores it, never as a -inf far distance.
             inv: d.map(|c| 1.0 / (c + 0.0)),
+            // Matches the inverse: -0 counts as positive.
+            neg: d.map(|c| c + 0.0 < 0.0),
             tnear: ray.tnear,
             k: [kx, ky, kz],
             shear: [d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]],
         })
     }
 
-    /// Entry distance into `n` if the ray meets it within `[tnear, tmax]`.
+    /// Entry distances into the four children of `n` and the mask of those the ray meets
+    /// within `[tnear, tmax]` (bit `l` for lane `l`). The near plane of each axis is chosen by
+    /// the direction's sign, so each lane is the same sequence of subtractions, products,
+    /// minima and maxima, which LLVM turns into 4-wide vector instructions.
     #[inline(always)]
-    pub(super) fn slab(&self, n: &Node, tmax: f32) -> Option<f32> {
-        let (mut t0, mut t1) = (self.tnear, tmax);
+    pub(super) fn slabs(&self, n: &Wide, tmax: f32) -> ([f32; LANES], u32) {
+        let (mut t0, mut t1) = ([self.tnear; LANES], [tmax; LANES]);
         for k in 0..3 {
-            let mut near = (n.lo[k] - self.org[k]) * self.inv[k];
-            let mut far = (n.hi[k] - self.org[k]) * self.inv[k];
-            // A NaN compares false everywhere, so it is never swapped in as far, and the two
-            // updates below keep the running value: the ray lies in that slab plane and the
-            // axis imposes no constraint.
-            if near > far {
-                std::mem::swap(&mut near, &mut far);
+            let (near, far) = if self.neg[k] {
+                (&n.hi[k], &n.lo[k])
+            } else {
+                (&n.lo[k], &n.hi[k])
+            };
+            for l in 0..LANES {
+                let a = (near[l] - self.org[k]) * self.inv[k];
+                let b = (far[l] - self.org[k]) * self.inv[k] * FAR_SCALE;
+                // A NaN (the ray lies in that slab plane: 0 times an infinite inverse) compares
+                // false, so both updates keep the running value and the axis imposes no
+                // constraint.
+                t0[l] = if a > t0[l] { a } else { t0[l] };
+                t1[l] = if b < t1[l] { b } else { t1[l] };
             }
-            far *= FAR_SCALE;
-            t0 = if near > t0 { near } else { t0 };
-            t1 = if far < t1 { far } else { t1 };
         }
-        (t0 <= t1).then_some(t0)
+        let mut mask = 0;
+        for l in 0..LANES {
+            mask |= ((t0[l] <= t1[l]) as u32) << l;
+        }
+        (t0, mask)
     }
 
     /// Woop et al.'s watertight test: `(t, u, v)` for a hit with `tnear <= t <= tmax`.
@@ -230,29 +245,76 @@ pub fn intersect_triangle(ray: &Ray, tri: [[f32; 3]; 3]) -> Option<(f32, f32, f3
     Prepared::new(ray)?.triangle(&tri, ray.tfar)
 }
 
+/// A child waiting on the traversal stack: a wide node (`count == 0`) or a leaf, and the
+/// distance at which the ray enters its box.
+#[derive(Clone, Copy, Default)]
+struct Entry {
+    index: u32,
+    count: u32,
+    t: f32,
+}
+
 impl Bvh {
     /// Closest hit (or with `ANY`, the first hit found) within `[tnear, tfar]`.
     pub(super) fn traverse<const ANY: bool>(&self, ray: &Ray) -> Option<Hit> {
         let p = Prepared::new(ray)?;
         let mut best_t = ray.tfar;
         let mut best: Option<(usize, f32, f32)> = None;
-        let mut inline = [(0u32, 0f32); INLINE_STACK];
+        let mut inline = [Entry::default(); INLINE_STACK];
         let mut heap;
-        // At most one entry per level is pushed, so the depth bounds the stack.
-        let stack: &mut [(u32, f32)] = if self.depth < INLINE_STACK {
+        // A wide node pushes at most all its children but the one taken, once per level.
+        let need = (LANES - 1) * self.depth + 1;
+        let stack: &mut [Entry] = if need <= INLINE_STACK {
             &mut inline
         } else {
-            heap = vec![(0u32, 0f32); self.depth + 1];
+            heap = vec![Entry::default(); need];
             &mut heap
         };
         let mut sp = 0usize;
-        p.slab(self.node(0), best_t)?;
-        let mut node = 0usize;
+        // The root is a wide node, whose box is not stored: its lanes are tested first thing.
+        let mut cur = Entry::default();
         'outer: loop {
-            let n = self.node(node);
-            if n.count > 0 {
-                let first = n.index as usize;
-                for (i, tri) in self.tris[first..first + n.count as usize]
+            if cur.count == 0 {
+                let n = &self.nodes[cur.index as usize];
+                let (dist, mut mask) = p.slabs(n, best_t);
+                if mask != 0 {
+                    let lane = |l: u32| Entry {
+                        index: n.index[l as usize],
+                        count: n.count[l as usize],
+                        t: dist[l as usize],
+                    };
+                    let first = lane(mask.trailing_zeros());
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        cur = first;
+                        continue;
+                    }
+                    // Two or more: push them all, sort the pushed run so the nearest is on top
+                    // (insertion sort of at most four), and take the nearest.
+                    let base = sp;
+                    stack[sp] = first;
+                    sp += 1;
+                    while mask != 0 {
+                        stack[sp] = lane(mask.trailing_zeros());
+                        sp += 1;
+                        mask &= mask - 1;
+                    }
+                    for i in base + 1..sp {
+                        let e = stack[i];
+                        let mut j = i;
+                        while j > base && stack[j - 1].t < e.t {
+                            stack[j] = stack[j - 1];
+                            j -= 1;
+                        }
+                        stack[j] = e;
+                    }
+                    sp -= 1;
+                    cur = stack[sp];
+                    continue;
+                }
+            } else {
+                let first = cur.index as usize;
+                for (i, tri) in self.tris[first..first + cur.count as usize]
                     .iter()
                     .enumerate()
                 {
@@ -264,39 +326,15 @@ impl Bvh {
                         }
                     }
                 }
-            } else {
-                let c = n.index as usize;
-                let [n0, n1] = &self.nodes[c / 2].0;
-                let d0 = p.slab(n0, best_t);
-                let d1 = p.slab(n1, best_t);
-                match (d0, d1) {
-                    (Some(a), Some(b)) => {
-                        let (near, far, t_far) = if a <= b { (c, c + 1, b) } else { (c + 1, c, a) };
-                        stack[sp] = (far as u32, t_far);
-                        sp += 1;
-                        node = near;
-                        continue;
-                    }
-                    (Some(_), None) => {
-                        node = c;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        node = c + 1;
-                        continue;
-                    }
-                    (None, None) => {}
-                }
             }
-            // Pop, skipping subtrees that start beyond the closest hit found since the push.
+            // Pop, skipping children that start beyond the closest hit found since the push.
             loop {
                 if sp == 0 {
                     break 'outer;
                 }
                 sp -= 1;
-                let (next, t_entry) = stack[sp];
-                if t_entry <= best_t {
-                    node = next as usize;
+                if stack[sp].t <= best_t {
+                    cur = stack[sp];
                     break;
                 }
             }
