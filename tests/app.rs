@@ -236,7 +236,11 @@ fn bench_bvh_writes_a_row_per_backend_quality_and_size() {
             .iter()
             .all(|row| row.bytes > 0 && row.seconds > 0.0 && row.triangles > 500)
     );
-    assert!(r.rows.iter().all(|row| row.camera_mrays_per_s > 0.0));
+    assert!(
+        r.rows
+            .iter()
+            .all(|row| row.camera_mrays_per_s > 0.0 && row.random_mrays_per_s > 0.0)
+    );
     let csv = std::fs::read_to_string(dir.join("bvh.csv")).unwrap();
     assert_eq!(csv.lines().count(), 11);
     let v: serde_json::Value =

@@ -3,7 +3,8 @@
 //! project's own tessellation (the paper's doubling rule, log-spaced sizes up to paper-high's
 //! 22.3 M triangles); the median of repeated builds, triangles per second, the memory of the
 //! built structure, and trace speed (camera rays of a panorama and the secondary rays its hits
-//! spawn) on every mesh. Writes `bvh.csv`, `bvh.png` and `summary.json` into `out`.
+//! spawn, and `crosscheck`'s incoherent random rays from above) on every mesh. Writes `bvh.csv`,
+//! `bvh.png` and `summary.json` into `out`.
 
 use std::fmt;
 use std::path::PathBuf;
@@ -16,6 +17,7 @@ use serde::Serialize;
 
 use super::{Progress, near_size_for, near_size_lod};
 use crate::accel::bvh::Bvh;
+use crate::accel::crosscheck::random_rays_over;
 use crate::accel::embree::{BuildOptions, Device, Quality, Scene};
 use crate::accel::{Accel, Ray, tracing_pool};
 use crate::analysis::charts::{Series, log_log};
@@ -78,6 +80,27 @@ pub struct BvhRow {
     /// refracted rays spawned at their hits.
     pub camera_mrays_per_s: f64,
     pub secondary_mrays_per_s: f64,
+    /// Trace speed of 200 000 incoherent rays from above the mesh aimed at random points in
+    /// its bounds (`vastocean crosscheck`'s random rays, seed 1).
+    pub random_mrays_per_s: f64,
+}
+
+/// The three ray sets every backend traces.
+struct RaySets {
+    camera: Vec<Ray>,
+    secondary: Vec<Ray>,
+    random: Vec<Ray>,
+}
+
+impl RaySets {
+    /// Mrays/s of `accel` on (camera, secondary, random).
+    fn speeds(&self, accel: &dyn Accel) -> (f64, f64, f64) {
+        (
+            mrays_per_s(accel, &self.camera),
+            mrays_per_s(accel, &self.secondary),
+            mrays_per_s(accel, &self.random),
+        )
+    }
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -101,8 +124,9 @@ fn ocean_mesh(ocean: &Surface, target: f64) -> Result<Mesh, AppError> {
     Ok(crate::lod::tessellate(&params, &ocean.sampler([0.0, 0.0]))?.0)
 }
 
-/// Camera rays of a 1024 x 512 panorama 2 m up, and the secondary rays their hits spawn.
-fn test_rays(accel: &dyn Accel) -> (Vec<Ray>, Vec<Ray>) {
+/// Camera rays of a 1024 x 512 panorama 2 m up, the secondary rays their hits spawn, and
+/// random rays from above.
+fn test_rays(accel: &dyn Accel) -> RaySets {
     let camera = Camera::new(Projection::Equirect { band_deg: None }, 1024, 2.0);
     let camera_rays: Vec<Ray> = (0..camera.height)
         .flat_map(|y| (0..camera.width).map(move |x| (x, y)))
@@ -137,8 +161,15 @@ fn test_rays(accel: &dyn Accel) -> (Vec<Ray>, Vec<Ray>) {
             })
         })
         .collect();
-    (camera_rays, secondary)
+    RaySets {
+        camera: camera_rays,
+        secondary,
+        random: random_rays_over(mesh, RANDOM_RAYS, 1),
+    }
 }
+
+/// How many random rays each backend traces.
+const RANDOM_RAYS: usize = 200_000;
 
 /// Mrays/s of tracing `rays` in parallel chunks (best of three, against noise from the
 /// machine).
@@ -161,7 +192,7 @@ fn embree_row(
     device: &Arc<Device>,
     mesh: &Arc<Mesh>,
     quality: Quality,
-    speed: Option<(&[Ray], &[Ray])>,
+    speed: Option<&RaySets>,
 ) -> Result<(BvhRow, Scene), AppError> {
     let options = BuildOptions {
         quality,
@@ -193,9 +224,7 @@ fn embree_row(
             .collect::<Result<_, _>>()?;
     }
     let seconds = median(times);
-    let (camera, secondary) = speed.map_or((0.0, 0.0), |(c, s)| {
-        (mrays_per_s(&scene, c), mrays_per_s(&scene, s))
-    });
+    let (camera, secondary, random) = speed.map_or((0.0, 0.0, 0.0), |r| r.speeds(&scene));
     let row = BvhRow {
         backend: "embree",
         quality: quality.to_string(),
@@ -207,12 +236,13 @@ fn embree_row(
         mesh_bytes: mesh.bytes(),
         camera_mrays_per_s: camera,
         secondary_mrays_per_s: secondary,
+        random_mrays_per_s: random,
     };
     Ok((row, scene))
 }
 
 /// The Rust BVH on one mesh.
-fn rust_row(mesh: &Arc<Mesh>, rays: (&[Ray], &[Ray])) -> BvhRow {
+fn rust_row(mesh: &Arc<Mesh>, rays: &RaySets) -> BvhRow {
     let n = mesh.triangle_count();
     let mut times = Vec::new();
     let mut last = None;
@@ -223,6 +253,7 @@ fn rust_row(mesh: &Arc<Mesh>, rays: (&[Ray], &[Ray])) -> BvhRow {
     }
     let bvh = last.expect("at least one build");
     let seconds = median(times);
+    let (camera, secondary, random) = rays.speeds(&bvh);
     BvhRow {
         backend: "rust",
         quality: "sah".into(),
@@ -232,8 +263,9 @@ fn rust_row(mesh: &Arc<Mesh>, rays: (&[Ray], &[Ray])) -> BvhRow {
         tris_per_s: n as f64 / seconds,
         bytes: Accel::bytes(&bvh),
         mesh_bytes: mesh.bytes(),
-        camera_mrays_per_s: mrays_per_s(&bvh, rays.0),
-        secondary_mrays_per_s: mrays_per_s(&bvh, rays.1),
+        camera_mrays_per_s: camera,
+        secondary_mrays_per_s: secondary,
+        random_mrays_per_s: random,
     }
 }
 
@@ -258,22 +290,23 @@ pub fn run(job: &BvhBenchJob) -> Result<BvhBenchReport, AppError> {
             let n = mesh.triangle_count();
             // Rays from the medium-quality scene, traced through every backend.
             let (medium, scene) = embree_row(&device, &mesh, Quality::Medium, None)?;
-            let (camera, secondary) = test_rays(&scene);
-            let speed = Some((camera.as_slice(), secondary.as_slice()));
+            let rays = test_rays(&scene);
+            let (camera, secondary, random) = rays.speeds(&scene);
             let medium = BvhRow {
-                camera_mrays_per_s: mrays_per_s(&scene, &camera),
-                secondary_mrays_per_s: mrays_per_s(&scene, &secondary),
+                camera_mrays_per_s: camera,
+                secondary_mrays_per_s: secondary,
+                random_mrays_per_s: random,
                 ..medium
             };
             drop(scene);
             progress.step(format!("{n} triangles: embree medium"));
             for quality in [Quality::Low, Quality::High, Quality::Refit] {
-                let (row, _) = embree_row(&device, &mesh, quality, speed)?;
+                let (row, _) = embree_row(&device, &mesh, quality, Some(&rays))?;
                 rows.push(row);
                 progress.step(format!("{n} triangles: embree {quality}"));
             }
             rows.push(medium);
-            rows.push(rust_row(&mesh, (&camera, &secondary)));
+            rows.push(rust_row(&mesh, &rays));
             progress.step(format!("{n} triangles: rust"));
         }
         Ok(rows)
@@ -301,12 +334,12 @@ fn rows_sorted_write(
         use std::io::Write;
         writeln!(
             w,
-            "backend,quality,triangles,seconds,builds,tris_per_s,bytes,mesh_bytes,camera_mrays_per_s,secondary_mrays_per_s"
+            "backend,quality,triangles,seconds,builds,tris_per_s,bytes,mesh_bytes,camera_mrays_per_s,secondary_mrays_per_s,random_mrays_per_s"
         )?;
         for r in &rows {
             writeln!(
                 w,
-                "{},{},{},{:.6},{},{:.0},{},{},{:.3},{:.3}",
+                "{},{},{},{:.6},{},{:.0},{},{},{:.3},{:.3},{:.3}",
                 r.backend,
                 r.quality,
                 r.triangles,
@@ -316,7 +349,8 @@ fn rows_sorted_write(
                 r.bytes,
                 r.mesh_bytes,
                 r.camera_mrays_per_s,
-                r.secondary_mrays_per_s
+                r.secondary_mrays_per_s,
+                r.random_mrays_per_s
             )?;
         }
         Ok(())
@@ -368,12 +402,12 @@ impl fmt::Display for BvhBenchReport {
         )?;
         writeln!(
             f,
-            "  backend quality  triangles    seconds   M tris/s      MB   camera Mrays/s   secondary Mrays/s"
+            "  backend quality  triangles    seconds   M tris/s      MB   camera Mrays/s   secondary Mrays/s   random Mrays/s"
         )?;
         for r in &self.rows {
             writeln!(
                 f,
-                "  {:<7} {:<7} {:>10} {:>10.4} {:>10.2} {:>7.1} {:>16.2} {:>19.2}",
+                "  {:<7} {:<7} {:>10} {:>10.4} {:>10.2} {:>7.1} {:>16.2} {:>19.2} {:>16.2}",
                 r.backend,
                 r.quality,
                 r.triangles,
@@ -381,7 +415,8 @@ impl fmt::Display for BvhBenchReport {
                 r.tris_per_s / 1e6,
                 r.bytes as f64 / 1e6,
                 r.camera_mrays_per_s,
-                r.secondary_mrays_per_s
+                r.secondary_mrays_per_s,
+                r.random_mrays_per_s
             )?;
         }
         write!(
