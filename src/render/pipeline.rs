@@ -158,8 +158,9 @@ pub struct RenderReport {
     pub seconds_tessellation: f64,
     pub seconds_build: f64,
     pub seconds_trace: f64,
-    /// Wall-clock seconds the mapped normals account for, estimated from timing one evaluation
-    /// in 64 (thread-seconds divided by the thread count).
+    /// Wall-clock seconds the mapped normals add to the trace, estimated from timed pairs of
+    /// evaluations (`Counters::normal_map_thread_seconds`; thread-seconds divided by the thread
+    /// count).
     pub seconds_normal_map: f64,
     /// `seconds_normal_map` as a share of `seconds_trace`.
     pub normal_map_share: f64,
