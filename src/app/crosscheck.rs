@@ -133,12 +133,13 @@ impl fmt::Display for CrosscheckReport {
         )?;
         writeln!(
             f,
-            "  agree {:.6} (same triangle {}, both miss {}), disagreements {}: {} explained (edge/vertex or tie), {} unexplained",
+            "  agree {:.6} (same triangle {}, both miss {}), disagreements {}: {} explained (edge/vertex or tie; {} of them by rounding at the ray's distance alone), {} unexplained",
             r.agree_fraction,
             r.same_prim,
             r.both_miss,
             r.disagreements,
             r.explained_disagreements,
+            r.explained_by_rounding_only,
             r.unexplained_disagreements
         )?;
         writeln!(

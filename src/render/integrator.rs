@@ -402,17 +402,19 @@ impl SceneRef<'_> {
         match (settings.normals, &self.ocean) {
             (NormalMode::Mapped, Some(ocean)) => {
                 // One evaluation in 64 timed alone, one timed with a second (see
-                // `Counters::normal_map_thread_seconds`).
+                // `Counters::normal_map_thread_seconds`). Neither is a row's first evaluation
+                // (counters start afresh with every row), whose cold caches would bias the
+                // single intervals up and the estimate down.
                 let slot = c.normal_evals % 64;
-                let t0 = (slot == 0 || slot == 32).then(std::time::Instant::now);
+                let t0 = (slot == 31 || slot == 63).then(std::time::Instant::now);
                 let n = self.mapped_normal(ocean, hit);
-                if slot == 32 {
+                if slot == 63 {
                     std::hint::black_box(self.mapped_normal(ocean, std::hint::black_box(hit)));
                 }
                 c.normal_evals += 1;
                 if let Some(t0) = t0 {
                     let ns = t0.elapsed().as_nanos() as u64;
-                    if slot == 0 {
+                    if slot == 31 {
                         c.normal_timed += 1;
                         c.normal_timed_ns += ns;
                     } else {

@@ -15,8 +15,9 @@ use super::layout::{Aabb, LANES, Node, Wide};
 /// longest path from the root to a leaf. The root must be an inner node.
 pub(super) fn collapse(nodes: &[Node]) -> (Vec<Wide>, usize) {
     debug_assert!(nodes[0].count == 0, "a leaf has nothing to collapse");
-    // m inner nodes become between m / 3 and m / 2 wide ones; about m / 2 on ocean meshes.
-    let mut wide = Vec::with_capacity(nodes.len() / 4 + 1);
+    // m inner nodes (nodes.len() = 2m + 1) become at most m wide ones, about m / 2 on ocean
+    // meshes; the upper bound, since this is a subtree's small scratch vector.
+    let mut wide = Vec::with_capacity(nodes.len() / 2 + 1);
     wide.push(Wide::EMPTY);
     let depth = fill(nodes, 0, &mut wide, 0);
     (wide, depth)

@@ -9,7 +9,6 @@
 //! component gives an infinite inverse whose NaN products are discarded, never propagated.
 //! Hits use Embree's barycentric convention (`(1-u-v)·v0 + u·v1 + v·v2`) so the integrator
 //! cannot tell this backend from Embree.
-
 //!
 //! [`build`] makes the tree (binary, then collapsed into 4-wide nodes by [`collapse`]),
 //! [`layout`] is its memory layout, [`traverse`] walks it.
@@ -45,9 +44,14 @@ pub struct Bvh {
 }
 
 impl Bvh {
-    /// Builds the hierarchy on the current rayon pool.
+    /// Builds the hierarchy on the current rayon pool. Panics for meshes of 2^32 - 1 triangles
+    /// or more (leaf offsets are 32-bit, and all ones marks an empty lane).
     pub fn build(mesh: Arc<Mesh>) -> Bvh {
         use rayon::prelude::*;
+        assert!(
+            mesh.triangle_count() < Wide::NONE as usize,
+            "the Rust BVH holds fewer than 2^32 - 1 triangles"
+        );
         let start = Instant::now();
         let build::Built { nodes, ids, depth } = build::build_nodes(&mesh);
         let tris: Vec<[[f32; 3]; 3]> = ids.par_iter().map(|&p| mesh.triangle(p)).collect();
@@ -129,12 +133,13 @@ impl Bvh {
     pub fn validate(&self) -> Result<(), String> {
         let mut seen = vec![false; self.tris.len()];
         let mut todo = vec![(0usize, 1usize)];
-        let mut deepest = 0;
+        let (mut deepest, mut visited) = (0, 0);
         let inside = |(lo, hi): ([f32; 3], [f32; 3]), p: [f32; 3], q: [f32; 3]| {
             (0..3).all(|k| lo[k] <= p[k] && q[k] <= hi[k])
         };
         while let Some((i, depth)) = todo.pop() {
             deepest = deepest.max(depth);
+            visited += 1;
             let w = &self.nodes[i];
             for l in 0..LANES {
                 let (index, count, lane) = (w.index[l], w.count[l], w.lane(l));
@@ -162,7 +167,7 @@ impl Bvh {
                     if count as usize > MAX_LEAF {
                         return Err(format!("a leaf of node {i} holds {count} triangles"));
                     }
-                    for t in (index..index + count).map(|t| t as usize) {
+                    for t in (index as usize..).take(count as usize) {
                         if t >= self.tris.len() || std::mem::replace(&mut seen[t], true) {
                             return Err(format!("triangle slot {t} is in two leaves or none"));
                         }
@@ -184,6 +189,11 @@ impl Bvh {
         if deepest != self.depth {
             return Err(format!("depth {} recorded, {deepest} walked", self.depth));
         }
+        // Children are stored after their parents (checked above), so a node reached twice
+        // would need two parents; one never reached is garbage.
+        if visited != self.nodes.len() {
+            return Err(format!("{visited} of {} nodes reachable", self.nodes.len()));
+        }
         Ok(())
     }
 }
@@ -200,7 +210,7 @@ fn refit_wide(nodes: &mut [Wide], tris: &[[[f32; 3]; 3]], i: usize) -> layout::A
             refit_wide(nodes, tris, index as usize)
         } else {
             let mut b = layout::Aabb::EMPTY;
-            for t in &tris[index as usize..(index + count) as usize] {
+            for t in &tris[index as usize..index as usize + count as usize] {
                 t.iter().for_each(|&v| b.grow(v));
             }
             b
@@ -313,6 +323,20 @@ mod tests {
         assert!(per_node > 2.5, "{per_node} children per node");
         assert!(bvh.depth() < 20, "depth {}", bvh.depth());
         assert!(bvh.build_seconds() > 0.0);
+    }
+
+    #[test]
+    fn refit_moves_the_boxes_with_the_vertices() {
+        let mut bvh = Bvh::build(Arc::new(Mesh::grid(40, 30, 0.5)));
+        let lift = |p: &[f32; 3]| [p[0], p[1] + 3.0 + 0.1 * p[0], p[2]];
+        let moved: Vec<[f32; 3]> = bvh.mesh.positions().iter().map(lift).collect();
+        let normals = bvh.mesh.normals().to_vec();
+        bvh.refit(&moved, &normals).unwrap();
+        bvh.validate().unwrap();
+        // A ray down through the raised sheet meets it where it now is.
+        let ray = Ray::new([5.3, 20.0, 4.1], [0.0, -1.0, 0.0]);
+        let h = bvh.intersect(&ray).expect("hit");
+        assert!((h.t - (20.0 - (3.0 + 0.53))).abs() < 1e-4, "{h:?}");
     }
 
     #[test]

@@ -1,9 +1,11 @@
 //! Traversal: the robust slab test of Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013 (far
 //! distances grow by `1 + 2·gamma(3)`; a zero direction component gives an infinite inverse
 //! whose NaN products are discarded, never propagated) on the four lanes of a wide node at
-//! once, nearest child first with a short stack, and the watertight ray/triangle test of Woop, Benthin & Wald, JCGT 2(1), 2013, with
-//! its f64 fallback for edge functions that round to zero and pbrt-v4's conservative bound that
-//! refuses hits whose t rounding cannot tell from zero.
+//! once, nearest child first with a short stack, and the watertight ray/triangle test of Woop,
+//! Benthin & Wald, JCGT 2(1), 2013, with its f64 fallback for edge functions that round to zero
+//! and pbrt-v4's conservative bound that refuses hits whose t rounding cannot tell from zero.
+//! The stack (128 entries, zeroed per ray) measured no slower than one of 32 on `bench bvh
+//! --quick`.
 
 use super::Bvh;
 use super::layout::{LANES, Wide};
