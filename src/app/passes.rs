@@ -253,6 +253,7 @@ pub fn merge(job: &MergeJob) -> Result<RenderReport, AppError> {
     r.backfacing_shading_count = c.backfacing_shading;
     r.truncated_paths = c.truncated;
     r.skipped_rays = c.skipped;
+    r.skipped_rising_rays = c.skipped_rising;
     r.skipped_above_rays = c.skipped_above;
     r.escaped_below_horizon = c.escaped_below_horizon;
     r.self_hits = c.self_hits;

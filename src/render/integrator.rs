@@ -92,6 +92,10 @@ pub struct Counters {
     pub truncated: u64,
     /// Rays in the water known not to meet the surface again, so not traced.
     pub skipped: u64,
+    /// Rays in the air leaving a hit upwards more steeply than any slope of the mesh, so
+    /// never meeting it again: not traced. Absent from pass files written before it.
+    #[serde(default)]
+    pub skipped_rising: u64,
     /// Rays leaving upwards from above the mesh's highest vertex, so never meeting it: not
     /// traced (the camera's upper half, for one). Absent from pass files written before it.
     #[serde(default)]
@@ -122,6 +126,7 @@ impl std::ops::AddAssign for Counters {
         self.terminated += o.terminated;
         self.truncated += o.truncated;
         self.skipped += o.skipped;
+        self.skipped_rising += o.skipped_rising;
         self.skipped_above += o.skipped_above;
         self.normal_evals += o.normal_evals;
         self.normal_timed += o.normal_timed;
@@ -205,7 +210,9 @@ pub fn tilt_to_earth(u: f32, v: f32, earth_radius_m: f64, n: Vec3) -> Vec3 {
 /// some triangle is wound facing sideways or down (an overhang, where choppy waves fold; meshes
 /// here are wound counter-clockwise seen from above), or some slope reaches 1. A ray under
 /// such a surface that descends faster than this can never meet it again, so it need not be
-/// traced (see `SceneRef::skip_slope`). Slopes under 1 also guarantee that a ray origin offset
+/// traced (see `SceneRef::skip_slope`); nor can a ray above it that climbs faster (the
+/// steepest descent of a triangle is also its steepest ascent). Slopes under 1 also guarantee
+/// that a ray origin offset
 /// below one triangle is below its neighbours too (two faces sloping opposite ways would need
 /// gradients whose dot product is below -1 to put it above one of them).
 pub fn max_descent_slope(mesh: &Mesh) -> Option<f32> {
@@ -246,7 +253,8 @@ const PACKET_MIN: usize = 2;
 pub struct SceneRef<'a> {
     pub accel: &'a dyn Accel,
     /// From [`max_descent_slope`]: rays in the water descending more steeply than this are not
-    /// traced (they cannot hit the surface) and return the upwelling radiance directly. `None`
+    /// traced (they cannot hit the surface) and return the upwelling radiance directly; nor are
+    /// rays leaving a hit into the air rising more steeply, which see the sky directly. `None`
     /// traces every ray.
     pub skip_slope: Option<f32>,
     /// From [`highest_vertex_y`]: rays in the air leaving upwards from above this height are
@@ -543,6 +551,20 @@ impl SceneRef<'_> {
             && ray.is_finite()
         {
             c.skipped_above += 1;
+            return Some(self.sky.radiance(Vec3::from(ray.org), d));
+        }
+        // The same argument as in the water, mirrored: a ray leaving a hit into the air (so
+        // starting on or above the surface) and rising more steeply than the surface ever
+        // does stays above it. Only spawned rays, whose origins are offset to the air side of
+        // the triangle they leave: a camera is checked to be above the ocean at its nadir, not
+        // above the mesh there (and rising camera rays are mostly skipped above anyway).
+        if !in_water
+            && segment > 0
+            && let Some(slope) = self.skip_slope
+            && d.y > slope * (d.x * d.x + d.z * d.z).sqrt()
+            && ray.is_finite()
+        {
+            c.skipped_rising += 1;
             return Some(self.sky.radiance(Vec3::from(ray.org), d));
         }
         c.rays += 1;

@@ -192,9 +192,12 @@ pub struct RenderReport {
     pub wrong_side_count: u64,
     pub backfacing_shading_count: u64,
     pub truncated_paths: u64,
-    /// Steepest descent slope of the mesh; rays in the water steeper than it are not traced.
+    /// Steepest slope of the mesh; rays in the water descending more steeply than it, and rays
+    /// leaving a hit into the air rising more steeply (`skipped_rising_rays`), are not traced.
     pub skip_slope: Option<f32>,
     pub skipped_rays: u64,
+    #[serde(default)]
+    pub skipped_rising_rays: u64,
     /// The mesh's highest vertex; rays leaving upwards from above it are not traced.
     #[serde(default)]
     pub skip_above_y: Option<f32>,
@@ -570,6 +573,7 @@ impl Prepared {
             truncated_paths: c.truncated,
             skip_slope: self.skip_slope,
             skipped_rays: c.skipped,
+            skipped_rising_rays: c.skipped_rising,
             skip_above_y: self.skip_above_y,
             skipped_above_rays: c.skipped_above,
             sky_irradiance: self.sky_irradiance.to_array(),

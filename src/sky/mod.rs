@@ -343,6 +343,31 @@ mod tests {
     }
 
     #[test]
+    fn map_lookup_wraps_at_the_seam() {
+        // Column 0 is bright, the last column dark: along +x (azimuth 0, the seam) the lookup
+        // sits halfway between them; a little either side it leans to its own side.
+        let mut img = RgbImage::new(8, 4);
+        for y in 0..4 {
+            img.pixels[y * 8] = [1.0; 3];
+        }
+        let at = |az: f32| lookup(&img, Vec3::new(az.cos(), 0.0, az.sin())).x;
+        assert!((at(0.0) - 0.5).abs() < 1e-6, "{}", at(0.0));
+        let quarter_texel = std::f32::consts::TAU / 32.0;
+        assert!(
+            (at(quarter_texel) - 0.75).abs() < 1e-5,
+            "{}",
+            at(quarter_texel)
+        );
+        assert!(
+            (at(-quarter_texel) - 0.25).abs() < 1e-5,
+            "{}",
+            at(-quarter_texel)
+        );
+        // Halfway round, far from the seam, nothing bright.
+        assert_eq!(at(std::f32::consts::PI), 0.0);
+    }
+
+    #[test]
     fn clear_sky_sun_disc_has_the_right_size() {
         let s = AnalyticSky::default();
         let AnalyticSky::Clear {
