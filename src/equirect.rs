@@ -59,7 +59,7 @@ pub fn atan2(y: f32, x: f32) -> f32 {
     };
     let u = if den == 0.0 { 0.0 } else { num / den };
     let z = u * u;
-    let p = (((8.053_744_5e-2 * z - 1.387_768_6e-1) * z + 1.997_771_1e-1) * z - 3.333_294_9e-1) * z;
+    let p = (((8.053_744_5e-2 * z - 1.387_768_6e-1) * z + 1.997_771_1e-1) * z - 3.333_295e-1) * z;
     let mut a = base + (p * u + u);
     if ay > ax {
         a = f32c::FRAC_PI_2 - a;

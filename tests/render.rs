@@ -531,12 +531,88 @@ fn rays_spawned_from_far_hits_never_rehit_their_own_triangle() {
     }
 }
 
-#[test]
-fn camera_packets_give_the_same_hits_and_radiance_as_single_rays() {
-    // One pixel's 16 jittered samples traced as a packet (what the film does) against the same
-    // rays traced one by one, on every backend: hit for hit, bit for bit, count for count.
+/// Traces every `stride`-th pixel's 16 jittered camera rays as one batch (what the film does)
+/// and one by one through the scalar path: hit for hit, radiance bit for bit, count for count.
+/// Returns the counts and the number of pixels.
+fn assert_batches_match_single_rays(
+    scene: &SceneRef,
+    settings: &TraceSettings,
+    camera: &Camera,
+    stride: (usize, usize),
+) -> (vastocean::render::integrator::Counters, u64) {
     use vastocean::render::integrator::{CAMERA_BATCH, Counters};
     use vastocean::rng::Rng;
+    let accel = scene.accel;
+    let origin = [0.0, 2.0, 0.0];
+    let (mut packed, mut single) = (Counters::default(), Counters::default());
+    let mut pixels = 0;
+    for y in (0..camera.height).step_by(stride.1) {
+        for x in (0..camera.width).step_by(stride.0) {
+            pixels += 1;
+            let key = (y * camera.width + x) as u64;
+            let rays: Vec<Ray> = (0..CAMERA_BATCH)
+                .map(|s| {
+                    let j = (s as f32 + 0.5) / CAMERA_BATCH as f32;
+                    let d = camera.direction(x as f32 + j, y as f32 + (j * 7.0).fract());
+                    Ray::new(origin, d.to_array())
+                })
+                .collect();
+            let rng = |s: usize| Rng::keyed(&[3, key, s as u64]);
+            let mut hits = vec![None; rays.len()];
+            accel.intersect_many(&rays, &mut hits);
+            let mut rngs: Vec<Rng> = (0..rays.len()).map(rng).collect();
+            let mut out = vec![Vec3::ZERO; rays.len()];
+            scene.radiance_camera_batch(&rays, settings, &mut rngs, &mut packed, &mut out);
+            for (s, ray) in rays.iter().enumerate() {
+                assert_eq!(hits[s], accel.intersect(ray), "{} {ray:?}", accel.name());
+                let l = scene.radiance(ray, false, 0, settings, &mut rng(s), &mut single);
+                assert_eq!(
+                    l.to_array().map(f32::to_bits),
+                    out[s].to_array().map(f32::to_bits),
+                    "{} pixel ({x}, {y}) sample {s}",
+                    accel.name()
+                );
+            }
+        }
+    }
+    // The timing fields differ run to run; every count must not.
+    for c in [&mut packed, &mut single] {
+        c.normal_timed_ns = 0;
+        c.normal_timed_twice_ns = 0;
+    }
+    assert_eq!(packed, single, "{}", accel.name());
+    (single, pixels)
+}
+
+/// Two nested cubes about the camera (at 2 m), their faces' normals towards the centre: every
+/// branch of a path meets a wall again until `max_segments`, so past `branch_depth` both
+/// branches of a hit draw random numbers, in an order a batched integrator must keep.
+fn nested_boxes() -> Mesh {
+    let (mut positions, mut normals, mut indices) = (vec![], vec![], vec![]);
+    for half in [5.0f32, 10.0] {
+        for axis in 0..3 {
+            for sign in [-1.0f32, 1.0] {
+                let mut n = [0.0f32; 3];
+                n[axis] = -sign;
+                let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
+                let base = positions.len() as u32;
+                for (u, v) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                    let mut p = [0.0f32; 3];
+                    (p[axis], p[a], p[b]) = (sign * half, u * half, v * half);
+                    p[1] += 2.0;
+                    positions.push(p);
+                    normals.push(n);
+                }
+                indices.extend([[base, base + 1, base + 2], [base, base + 2, base + 3]]);
+            }
+        }
+    }
+    Mesh::new(positions, normals, vec![], indices).unwrap()
+}
+
+#[test]
+fn camera_batches_give_the_same_hits_and_radiance_as_single_rays() {
+    // The ocean, as the film renders it (mapped normals, the skip shortcuts), on every backend.
     let ocean = small_ocean(0.8);
     let sampler = ocean.sampler([0.0, 0.0]);
     let mesh = ocean_grid(&sampler, 40.0, 0.5);
@@ -544,54 +620,31 @@ fn camera_packets_give_the_same_hits_and_radiance_as_single_rays() {
     let top = vastocean::render::integrator::highest_vertex_y(&mesh);
     let sky = Sky::analytic(AnalyticSky::default());
     let camera = equirect(256, Some((10.0, -60.0)));
-    let settings = TraceSettings::default();
-    let origin = [0.0, 2.0, 0.0];
     for accel in crate::common::backends(mesh) {
         let scene = SceneRef {
             skip_slope: slope,
             skip_above_y: top,
             ..scene_ref(accel.as_ref(), sampler, 6_371_000.0, &sky)
         };
-        let (mut packed, mut single) = (Counters::default(), Counters::default());
-        let mut pixels = 0;
-        for y in (0..camera.height).step_by(7) {
-            for x in (0..camera.width).step_by(13) {
-                pixels += 1;
-                let key = (y * camera.width + x) as u64;
-                let rays: Vec<Ray> = (0..CAMERA_BATCH)
-                    .map(|s| {
-                        let j = (s as f32 + 0.5) / CAMERA_BATCH as f32;
-                        let d = camera.direction(x as f32 + j, y as f32 + (j * 7.0).fract());
-                        Ray::new(origin, d.to_array())
-                    })
-                    .collect();
-                let rng = |s: usize| Rng::keyed(&[3, key, s as u64]);
-                let mut hits = vec![None; rays.len()];
-                accel.intersect_many(&rays, &mut hits);
-                let mut rngs: Vec<Rng> = (0..rays.len()).map(rng).collect();
-                let mut out = vec![Vec3::ZERO; rays.len()];
-                scene.radiance_camera_batch(&rays, &settings, &mut rngs, &mut packed, &mut out);
-                for (s, ray) in rays.iter().enumerate() {
-                    assert_eq!(hits[s], accel.intersect(ray), "{} {ray:?}", accel.name());
-                    let l = scene.radiance(ray, false, 0, &settings, &mut rng(s), &mut single);
-                    assert_eq!(
-                        l.to_array().map(f32::to_bits),
-                        out[s].to_array().map(f32::to_bits),
-                        "{} pixel ({x}, {y}) sample {s}",
-                        accel.name()
-                    );
-                }
-            }
-        }
-        // The timing fields differ run to run; every count must not.
-        for c in [&mut packed, &mut single] {
-            c.normal_timed_ns = 0;
-            c.normal_timed_twice_ns = 0;
-        }
-        assert_eq!(packed, single, "{}", accel.name());
-        assert!(
-            single.hits > 10 * pixels && single.skipped_above > 0,
-            "{single:?}"
-        );
+        let (c, pixels) =
+            assert_batches_match_single_rays(&scene, &TraceSettings::default(), &camera, (13, 7));
+        assert!(c.hits > 10 * pixels && c.skipped_above > 0, "{c:?}");
+    }
+    // Paths that branch and bounce to the last segment: both branches of most hits draw
+    // their random choices, so a batch that finished a sample's second branch before its
+    // first would draw them in another order and differ.
+    let settings = TraceSettings {
+        normals: NormalMode::Vertex,
+        branch_depth: 2,
+        ..TraceSettings::default()
+    };
+    for accel in crate::common::backends(nested_boxes()) {
+        let scene = SceneRef {
+            ocean: None,
+            ..scene_ref(accel.as_ref(), sampler, 6_371_000.0, &sky)
+        };
+        let (c, pixels) =
+            assert_batches_match_single_rays(&scene, &settings, &equirect(32, None), (3, 3));
+        assert!(c.hits > 4 * 16 * pixels, "{c:?}");
     }
 }

@@ -1,7 +1,9 @@
 //! The Monte Carlo path tracer of paper section 5: camera rays meet the tessellated ocean, and
 //! every hit splits into a Fresnel reflection and a refraction (weights F and 1 - F), up to a
 //! branching depth past which one of the two is chosen at random with probability F (the
-//! estimator stays unbiased). Paths end after `max_segments` segments (the paper: 10).
+//! estimator stays unbiased). Paths end after `max_segments` segments (the paper: 10). The
+//! paths of one pixel's samples are traced together, a stage at a time
+//! ([`SceneRef::radiance_batch`]), and each comes out bit for bit as it would alone.
 //!
 //! The shading normal is the interpolated vertex normal (`vertex`, the paper's "without
 //! normal mapping") or, for `mapped` (paper section 4), the ocean normal of eq. 7 recomputed
@@ -267,6 +269,7 @@ pub struct SceneRef<'a> {
 }
 
 /// The surface at a hit, as shading needs it.
+#[derive(Clone, Copy)]
 struct SurfacePoint {
     p: Vec3,
     /// Geometric normal, oriented to the air side (agreeing with the vertex normals).
@@ -327,6 +330,7 @@ pub fn spawn_ray(mesh: &Mesh, hit: &Hit, w: Vec3) -> Ray {
 
 /// What one hit does to a path: where it is, which way the medium changes, the attenuation of
 /// the segment that reached it, and the two directions leaving it with the Fresnel weight.
+#[derive(Clone, Copy)]
 struct Scatter {
     sp: SurfacePoint,
     from_below: bool,
@@ -336,6 +340,23 @@ struct Scatter {
     reflected: Option<Vec3>,
     /// `None` on total internal reflection; `Some(None)` when the policy ended the branch.
     refracted: Option<Option<Vec3>>,
+}
+
+impl Scatter {
+    /// A placeholder for the unused slots of a batch's array.
+    const NONE: Scatter = Scatter {
+        sp: SurfacePoint {
+            p: Vec3::ZERO,
+            ng: Vec3::Y,
+            err: Vec3::ZERO,
+            prim: 0,
+        },
+        from_below: false,
+        attenuation: Vec3::ZERO,
+        fresnel: 0.0,
+        reflected: None,
+        refracted: None,
+    };
 }
 
 /// A new direction `w` on its proper side of the triangle (normal `ng`, facing the incoming
@@ -444,6 +465,7 @@ impl SceneRef<'_> {
     }
 
     /// Radiance arriving at `ray.org` along `-ray.dir`. `in_water`: the ray travels in the sea.
+    /// (A batch of one: see [`Self::radiance_batch`].)
     pub fn radiance(
         &self,
         ray: &Ray,
@@ -453,14 +475,28 @@ impl SceneRef<'_> {
         rng: &mut Rng,
         c: &mut Counters,
     ) -> Vec3 {
-        self.radiance_from(ray, None, in_water, segment, settings, rng, c)
+        let vertex = PathVertex {
+            ray: *ray,
+            sample: 0,
+            parent: None,
+            in_water,
+        };
+        let mut out = [Vec3::ZERO];
+        self.radiance_batch(
+            &[vertex],
+            segment,
+            settings,
+            std::slice::from_mut(rng),
+            c,
+            &mut out,
+        );
+        out[0]
     }
 
     /// Radiance along camera rays (in the air, first segment), bit for bit what
-    /// [`Self::radiance`] gives each (and the same counts), with the rays that need the BVH
-    /// handed to it together: Embree traces them as packets of 16, and one pixel's samples,
-    /// all but parallel, make a coherent packet. At most [`CAMERA_BATCH`] rays; `rngs[i]` is
-    /// ray i's generator and `out[i]` receives its radiance.
+    /// [`Self::radiance`] gives each one alone (and the same counts), computed together: see
+    /// [`Self::radiance_batch`]. At most [`CAMERA_BATCH`] rays; `rngs[i]` is ray i's generator
+    /// and `out[i]` receives its radiance.
     pub fn radiance_camera_batch(
         &self,
         rays: &[Ray],
@@ -471,15 +507,56 @@ impl SceneRef<'_> {
     ) {
         let n = rays.len();
         assert!(n <= CAMERA_BATCH && rngs.len() == n && out.len() == n);
-        let mut answered = [None; CAMERA_BATCH];
+        let mut entries = [PathVertex::NONE; CAMERA_BATCH];
+        for (i, (e, ray)) in entries.iter_mut().zip(rays).enumerate() {
+            *e = PathVertex {
+                ray: *ray,
+                sample: i as u8,
+                parent: None,
+                in_water: false,
+            };
+        }
+        self.radiance_batch(&entries[..n], 0, settings, rngs, c, out);
+    }
+
+    /// The radiance of up to [`CAMERA_BATCH`] rays at `segment`, each from a different sample
+    /// (`rngs[entry.sample]` is its generator), into `out`: the path tracer itself, a stage at a
+    /// time over the whole batch, each ray's result bit for bit what it gets in a batch of one.
+    ///
+    /// The rays the BVH must see are traced together (Embree: one packet; one pixel's camera
+    /// rays are all but parallel), every hit is shaded, and the rays leaving the hits form two
+    /// batches of their own: the first branch of every hit (its reflection, or the branch chosen
+    /// past `branch_depth`), then the second (its refraction, while both are followed). One
+    /// sample's path is a chain of dependent long-latency steps (square roots, divisions, texel
+    /// reads); a stage over 16 independent samples lets the processor overlap them. A sample's
+    /// subtrees are still finished in the scalar path's depth-first order, first branch before
+    /// second, whatever else the batch holds, so its random numbers are drawn in the same
+    /// order.
+    fn radiance_batch(
+        &self,
+        entries: &[PathVertex],
+        segment: u32,
+        settings: &TraceSettings,
+        rngs: &mut [Rng],
+        c: &mut Counters,
+        out: &mut [Vec3],
+    ) {
+        // Answered without the BVH, or traced together.
         let mut traced = [Ray::new([0.0; 3], [0.0, 1.0, 0.0]); CAMERA_BATCH];
+        let mut traced_entry = [0u8; CAMERA_BATCH];
         let mut m = 0;
-        for (i, ray) in rays.iter().enumerate() {
-            answered[i] = self.answer_untraced(ray, false, 0, settings, c);
-            if answered[i].is_none() {
-                traced[m] = *ray;
-                m += 1;
+        for (k, e) in entries.iter().enumerate() {
+            match self.answer_untraced(&e.ray, e.in_water, segment, settings, c) {
+                Some(l) => out[k] = l,
+                None => {
+                    traced[m] = e.ray;
+                    traced_entry[m] = k as u8;
+                    m += 1;
+                }
             }
+        }
+        if m == 0 {
+            return;
         }
         let mut hits = [None; CAMERA_BATCH];
         if m >= PACKET_MIN {
@@ -489,35 +566,63 @@ impl SceneRef<'_> {
                 *h = self.accel.intersect(r);
             }
         }
-        let mut hits = hits[..m].iter();
-        for (i, ray) in rays.iter().enumerate() {
-            out[i] = match answered[i] {
-                Some(l) => l,
-                None => {
-                    let hit = *hits.next().expect("one hit per traced ray");
-                    self.radiance_given(ray, None, false, 0, hit, settings, &mut rngs[i], c)
-                }
-            };
-        }
-    }
 
-    /// [`Self::radiance`] for a ray spawned on triangle `parent` (counted if it meets it again).
-    #[allow(clippy::too_many_arguments)]
-    fn radiance_from(
-        &self,
-        ray: &Ray,
-        parent: Option<u32>,
-        in_water: bool,
-        segment: u32,
-        settings: &TraceSettings,
-        rng: &mut Rng,
-        c: &mut Counters,
-    ) -> Vec3 {
-        if let Some(l) = self.answer_untraced(ray, in_water, segment, settings, c) {
-            return l;
+        // Shading at every hit; what a miss sees.
+        let mut shaded = [(0u8, Scatter::NONE); CAMERA_BATCH];
+        let mut n_shaded = 0;
+        for (&k, hit) in traced_entry[..m].iter().zip(&hits[..m]) {
+            let e = &entries[k as usize];
+            match hit {
+                None => out[k as usize] = self.miss(&e.ray, e.in_water, segment, settings, c),
+                Some(hit) => {
+                    c.hits += 1;
+                    // A planar triangle cannot meet a ray leaving it twice: this is rounding.
+                    c.self_hits += u64::from(e.parent == Some(hit.prim));
+                    shaded[n_shaded] = (k, self.scatter(Vec3::from(e.ray.dir), hit, settings, c));
+                    n_shaded += 1;
+                }
+            }
         }
-        let hit = self.accel.intersect(ray);
-        self.radiance_given(ray, parent, in_water, segment, hit, settings, rng, c)
+        let shaded = &shaded[..n_shaded];
+
+        // The branches: which each hit follows (drawing a sample's random choice here, as the
+        // scalar path does before descending), then each batch of branches in turn.
+        let mut first = [None; CAMERA_BATCH];
+        let mut second = [None; CAMERA_BATCH];
+        for (j, (k, s)) in shaded.iter().enumerate() {
+            let rng = &mut rngs[entries[*k as usize].sample as usize];
+            (first[j], second[j]) = branches(s, segment, settings, rng);
+        }
+        let mut l_first = [Vec3::ZERO; CAMERA_BATCH];
+        let mut l_second = [Vec3::ZERO; CAMERA_BATCH];
+        for (dirs, l) in [(&first, &mut l_first), (&second, &mut l_second)] {
+            let mut batch = [PathVertex::NONE; CAMERA_BATCH];
+            let mut of = [0u8; CAMERA_BATCH];
+            let mut b = 0;
+            for (j, (k, s)) in shaded.iter().enumerate() {
+                if let Some((w, in_water)) = dirs[j] {
+                    batch[b] = PathVertex {
+                        ray: s.sp.spawn(w),
+                        sample: entries[*k as usize].sample,
+                        parent: Some(s.sp.prim),
+                        in_water,
+                    };
+                    of[b] = j as u8;
+                    b += 1;
+                }
+            }
+            if b > 0 {
+                let mut lb = [Vec3::ZERO; CAMERA_BATCH];
+                self.radiance_batch(&batch[..b], segment + 1, settings, rngs, c, &mut lb[..b]);
+                for (&j, lb) in of[..b].iter().zip(lb) {
+                    l[j as usize] = lb;
+                }
+            }
+        }
+        for (j, (k, s)) in shaded.iter().enumerate() {
+            out[*k as usize] =
+                s.attenuation * combine(s, segment, settings, l_first[j], l_second[j]);
+        }
     }
 
     /// The radiance of a ray answered without the BVH: cut at `max_segments`, or known to
@@ -571,35 +676,24 @@ impl SceneRef<'_> {
         None
     }
 
-    /// The radiance of a traced ray given its closest hit.
-    #[allow(clippy::too_many_arguments)]
-    fn radiance_given(
+    /// What a traced ray that met nothing sees: the sky, or in the water the upwelling light.
+    fn miss(
         &self,
         ray: &Ray,
-        parent: Option<u32>,
         in_water: bool,
         segment: u32,
-        hit: Option<Hit>,
         settings: &TraceSettings,
-        rng: &mut Rng,
         c: &mut Counters,
     ) -> Vec3 {
         let d = Vec3::from(ray.dir);
-        let Some(hit) = hit else {
-            if segment == 0 && !in_water && d.y < settings.must_hit_below_y {
-                c.escaped_below_horizon += 1;
-            }
-            return if in_water {
-                Vec3::from(settings.upwelling)
-            } else {
-                self.sky.radiance(Vec3::from(ray.org), d)
-            };
-        };
-        c.hits += 1;
-        // A planar triangle cannot meet a ray leaving it twice: this is rounding error.
-        c.self_hits += u64::from(parent == Some(hit.prim));
-        let s = self.scatter(d, &hit, settings, c);
-        s.attenuation * self.follow(&s, segment, settings, rng, c)
+        if segment == 0 && !in_water && d.y < settings.must_hit_below_y {
+            c.escaped_below_horizon += 1;
+        }
+        if in_water {
+            Vec3::from(settings.upwelling)
+        } else {
+            self.sky.radiance(Vec3::from(ray.org), d)
+        }
     }
 
     /// Shading at a hit of a ray travelling along `d`: the interface's normals, the Fresnel
@@ -660,50 +754,68 @@ impl SceneRef<'_> {
             refracted,
         }
     }
+}
 
-    /// Radiance the hit sends back: both branches, Fresnel-weighted, up to `branch_depth`;
-    /// deeper, one branch chosen with probability F (unbiased).
-    fn follow(
-        &self,
-        s: &Scatter,
-        segment: u32,
-        settings: &TraceSettings,
-        rng: &mut Rng,
-        c: &mut Counters,
-    ) -> Vec3 {
-        // The reflected ray stays in the medium it came from; the refracted one changes it.
-        let (r_water, t_water) = (s.from_below, !s.from_below);
-        let mut trace = |w: Vec3, in_water: bool, rng: &mut Rng| {
-            let ray = s.sp.spawn(w);
-            self.radiance_from(
-                &ray,
-                Some(s.sp.prim),
-                in_water,
-                segment + 1,
-                settings,
-                rng,
-                c,
-            )
-        };
-        let mut branch = |w: Option<Vec3>, in_water: bool, rng: &mut Rng| {
-            w.map_or(Vec3::ZERO, |w| trace(w, in_water, rng))
-        };
-        let f = s.fresnel;
-        match s.refracted {
-            None => branch(s.reflected, r_water, rng),
-            Some(t_dir) if segment < settings.branch_depth => {
-                let lr = branch(s.reflected, r_water, rng);
-                let lt = branch(t_dir, t_water, rng);
-                f * lr + (1.0 - f) * lt
-            }
-            Some(t_dir) => {
-                if rng.f32() < f {
-                    branch(s.reflected, r_water, rng)
-                } else {
-                    branch(t_dir, t_water, rng)
-                }
+/// One ray of a batch in [`SceneRef::radiance_batch`]: sample `sample`'s ray, spawned on
+/// triangle `parent` (none for a camera ray), travelling in the water or the air.
+#[derive(Clone, Copy)]
+struct PathVertex {
+    ray: Ray,
+    sample: u8,
+    parent: Option<u32>,
+    in_water: bool,
+}
+
+impl PathVertex {
+    const NONE: PathVertex = PathVertex {
+        ray: Ray {
+            org: [0.0; 3],
+            tnear: 0.0,
+            dir: [0.0, 1.0, 0.0],
+            tfar: f32::INFINITY,
+        },
+        sample: 0,
+        parent: None,
+        in_water: false,
+    };
+}
+
+/// A branch leaving a hit: its direction and whether it travels in the water (`None`: not
+/// followed, radiance zero).
+type Branch = Option<(Vec3, bool)>;
+
+/// The branches a hit at `segment` follows, first then second: the reflection alone on total
+/// internal reflection; both, up to `branch_depth`; past it one, chosen with probability F
+/// (drawn from `rng`: the estimator stays unbiased). The reflected ray stays in the medium it
+/// came from, the refracted one changes it.
+fn branches(
+    s: &Scatter,
+    segment: u32,
+    settings: &TraceSettings,
+    rng: &mut Rng,
+) -> (Branch, Branch) {
+    let reflected = s.reflected.map(|w| (w, s.from_below));
+    let refracted = |t: Option<Vec3>| t.map(|w| (w, !s.from_below));
+    match s.refracted {
+        None => (reflected, None),
+        Some(t) if segment < settings.branch_depth => (reflected, refracted(t)),
+        Some(t) => {
+            if rng.f32() < s.fresnel {
+                (reflected, None)
+            } else {
+                (refracted(t), None)
             }
         }
+    }
+}
+
+/// The radiance a hit sends back from its branches' radiances (see [`branches`]).
+fn combine(s: &Scatter, segment: u32, settings: &TraceSettings, first: Vec3, second: Vec3) -> Vec3 {
+    match s.refracted {
+        Some(_) if segment < settings.branch_depth => {
+            s.fresnel * first + (1.0 - s.fresnel) * second
+        }
+        _ => first,
     }
 }
 
