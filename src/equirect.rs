@@ -43,8 +43,8 @@ pub fn direction_pixel(d: Vec3, w: f32, h: f32) -> (f32, f32) {
 /// atan2(y, x) in (-pi, pi], within 3e-7 rad of the true angle, inlined: every sky-map lookup
 /// takes two, and libm's `atan2f` and `asinf` calls were 6 % of the default render's trace.
 /// The kernel is Cephes' `atanf` (S. L. Moshier): reduction to |t| <= tan(pi/8) by
-/// atan(t) = pi/4 + atan((t - 1) / (t + 1)), then an odd polynomial of degree 9. Both zero
-/// gives 0, NaN gives NaN. The division and square roots on a lookup's path are what it costs
+/// atan(t) = pi/4 + atan((t - 1) / (t + 1)), then an odd polynomial of degree 9. Zeros and
+/// infinities give what libm gives (atan2(+-0, -0) = +-pi), NaN gives NaN. The division and square roots on a lookup's path are what it costs
 /// (the sky's time is latency, not instruction count).
 #[inline]
 pub fn atan2(y: f32, x: f32) -> f32 {
@@ -57,7 +57,7 @@ pub fn atan2(y: f32, x: f32) -> f32 {
     } else {
         (0.0, lo, hi)
     };
-    let u = if den == 0.0 { 0.0 } else { num / den };
+    let u = if den == 0.0 { num } else { num / den };
     let z = u * u;
     let p = (((8.053_744_5e-2 * z - 1.387_768_6e-1) * z + 1.997_771_1e-1) * z - 3.333_295e-1) * z;
     let mut a = base + (p * u + u);
@@ -157,6 +157,9 @@ mod tests {
             assert!((atan2(y, x) - y.atan2(x)).abs() <= 2.5e-7, "{y} {x}");
         }
         assert!(atan2(f32::NAN, 1.0).is_nan() && atan2(1.0, f32::NAN).is_nan());
+        assert!(atan2(f32::NAN, 0.0).is_nan() && atan2(0.0, f32::NAN).is_nan());
+        assert_eq!(atan2(0.0, -0.0), std::f32::consts::PI);
+        assert_eq!(atan2(-0.0, 0.0).to_bits(), (-0.0f32).to_bits());
         assert_eq!(atan2(5.0, f32::INFINITY), 0.0);
     }
 

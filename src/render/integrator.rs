@@ -207,18 +207,22 @@ pub fn tilt_to_earth(u: f32, v: f32, earth_radius_m: f64, n: Vec3) -> Vec3 {
     n * c + a.cross(n) * s + a * a.dot(n) * (1.0 - c)
 }
 
-/// The steepest descent slope (vertical drop per horizontal metre) of any triangle of a mesh
-/// that is a height field in y, or `None` when the shortcut it enables would not be exact:
-/// some triangle is wound facing sideways or down (an overhang, where choppy waves fold; meshes
-/// here are wound counter-clockwise seen from above), or some slope reaches 1. A ray under
-/// such a surface that descends faster than this can never meet it again, so it need not be
-/// traced (see `SceneRef::skip_slope`); nor can a ray above it that climbs faster (the
-/// steepest descent of a triangle is also its steepest ascent). Slopes under 1 also guarantee
-/// that a ray origin offset
-/// below one triangle is below its neighbours too (two faces sloping opposite ways would need
-/// gradients whose dot product is below -1 to put it above one of them).
-pub fn max_descent_slope(mesh: &Mesh) -> Option<f32> {
+/// The steepest slope (height change per horizontal metre) of any triangle of a mesh that is a
+/// height field in y, or `None` when the shortcuts it enables would not be exact: some triangle
+/// is wound facing sideways or down (an overhang, where choppy waves fold; meshes here are
+/// wound counter-clockwise seen from above), has a vertex normal that disagrees with its
+/// winding (the integrator takes the air side from the vertex normals), or has a slope of 1
+/// or more. Over the mesh's footprint the surface then changes height by at most this much
+/// per metre, so a ray under it that descends faster never meets it again, nor does a ray
+/// above it that climbs faster: neither need be traced (see `SceneRef::skip_slope`). The
+/// argument follows the ray's path over the footprint, which is convex for the default square
+/// pattern up to the cell-sized steps of its cut edge (and of a frustum pattern's sides),
+/// where a ray leaves the mesh for good in practice. Slopes under 1 also guarantee that a ray
+/// origin offset below one triangle is below its neighbours too (two faces sloping opposite
+/// ways would need gradients whose dot product is below -1 to put it above one of them).
+pub fn max_slope(mesh: &Mesh) -> Option<f32> {
     use rayon::prelude::*;
+    let normals = mesh.normals();
     // per triangle: Some(slope), or None for one facing sideways or down
     let worst = (0..mesh.triangle_count() as u32)
         .into_par_iter()
@@ -228,7 +232,11 @@ pub fn max_descent_slope(mesh: &Mesh) -> Option<f32> {
             if n == Vec3::ZERO {
                 return Some(0.0); // degenerate: no area to hit
             }
-            (n.y > 0.0).then(|| (n.x * n.x + n.z * n.z).sqrt() / n.y)
+            let agree = normals.is_empty()
+                || mesh.indices()[prim as usize]
+                    .iter()
+                    .all(|&v| Vec3::from(normals[v as usize]).dot(n) > 0.0);
+            (n.y > 0.0 && agree).then(|| (n.x * n.x + n.z * n.z).sqrt() / n.y)
         })
         .try_reduce(|| 0f32, |a, b| Some(a.max(b)))?;
     (worst < 1.0).then_some(worst)
@@ -245,16 +253,19 @@ pub fn highest_vertex_y(mesh: &Mesh) -> Option<f32> {
         .reduce_with(f32::max)
 }
 
-/// Most camera rays [`SceneRef::radiance_camera_batch`] takes at once: one Embree packet.
+/// Most camera rays [`SceneRef::radiance_camera_batch`] takes at once: one Embree packet. It
+/// bounds every batch of [`SceneRef::radiance_batch`] (a batch holds a sample at most once).
 pub const CAMERA_BATCH: usize = 16;
-/// Fewer rays than this are traced one by one: a packet of 16 lanes carrying one ray was 12 %
-/// slower than single rays (default scene at 1 spp), carrying four 9 % faster.
+/// Fewer rays than this are traced one by one: a packet of 16 lanes carrying one camera ray was
+/// 12 % slower than single rays (default scene at 1 spp), carrying four 9 % faster. The same
+/// threshold serves the batches of secondary rays, which are less coherent; on the default
+/// scene few of them need the BVH at all (most are answered by the skips).
 const PACKET_MIN: usize = 2;
 
 /// What the integrator traces against.
 pub struct SceneRef<'a> {
     pub accel: &'a dyn Accel,
-    /// From [`max_descent_slope`]: rays in the water descending more steeply than this are not
+    /// From [`max_slope`]: rays in the water descending more steeply than this are not
     /// traced (they cannot hit the surface) and return the upwelling radiance directly; nor are
     /// rays leaving a hit into the air rising more steeply, which see the sky directly. `None`
     /// traces every ray.
@@ -541,12 +552,14 @@ impl SceneRef<'_> {
         c: &mut Counters,
         out: &mut [Vec3],
     ) {
+        debug_assert!(entries.len() <= CAMERA_BATCH && out.len() == entries.len());
         // Answered without the BVH, or traced together.
-        let mut traced = [Ray::new([0.0; 3], [0.0, 1.0, 0.0]); CAMERA_BATCH];
+        let mut traced = [PathVertex::NONE.ray; CAMERA_BATCH];
         let mut traced_entry = [0u8; CAMERA_BATCH];
         let mut m = 0;
         for (k, e) in entries.iter().enumerate() {
-            match self.answer_untraced(&e.ray, e.in_water, segment, settings, c) {
+            match self.answer_untraced(&e.ray, e.in_water, e.parent.is_some(), segment, settings, c)
+            {
                 Some(l) => out[k] = l,
                 None => {
                     traced[m] = e.ray;
@@ -589,9 +602,10 @@ impl SceneRef<'_> {
         // scalar path does before descending), then each batch of branches in turn.
         let mut first = [None; CAMERA_BATCH];
         let mut second = [None; CAMERA_BATCH];
+        let mut both = [false; CAMERA_BATCH];
         for (j, (k, s)) in shaded.iter().enumerate() {
             let rng = &mut rngs[entries[*k as usize].sample as usize];
-            (first[j], second[j]) = branches(s, segment, settings, rng);
+            (first[j], second[j], both[j]) = branches(s, segment, settings, rng);
         }
         let mut l_first = [Vec3::ZERO; CAMERA_BATCH];
         let mut l_second = [Vec3::ZERO; CAMERA_BATCH];
@@ -620,17 +634,23 @@ impl SceneRef<'_> {
             }
         }
         for (j, (k, s)) in shaded.iter().enumerate() {
-            out[*k as usize] =
-                s.attenuation * combine(s, segment, settings, l_first[j], l_second[j]);
+            let l = if both[j] {
+                s.fresnel * l_first[j] + (1.0 - s.fresnel) * l_second[j]
+            } else {
+                l_first[j]
+            };
+            out[*k as usize] = s.attenuation * l;
         }
     }
 
     /// The radiance of a ray answered without the BVH: cut at `max_segments`, or known to
     /// miss the surface (the skip shortcuts). `None` when it must be traced, which is counted.
+    /// `spawned`: the ray leaves a hit (on the side of the triangle it travels in).
     fn answer_untraced(
         &self,
         ray: &Ray,
         in_water: bool,
+        spawned: bool,
         segment: u32,
         settings: &TraceSettings,
         c: &mut Counters,
@@ -664,7 +684,7 @@ impl SceneRef<'_> {
         // the triangle they leave: a camera is checked to be above the ocean at its nadir, not
         // above the mesh there (and rising camera rays are mostly skipped above anyway).
         if !in_water
-            && segment > 0
+            && spawned
             && let Some(slope) = self.skip_slope
             && d.y > slope * (d.x * d.x + d.z * d.z).sqrt()
             && ray.is_finite()
@@ -784,38 +804,29 @@ impl PathVertex {
 /// followed, radiance zero).
 type Branch = Option<(Vec3, bool)>;
 
-/// The branches a hit at `segment` follows, first then second: the reflection alone on total
-/// internal reflection; both, up to `branch_depth`; past it one, chosen with probability F
-/// (drawn from `rng`: the estimator stays unbiased). The reflected ray stays in the medium it
-/// came from, the refracted one changes it.
+/// The branches a hit at `segment` follows, first then second, and whether both are (then F
+/// and 1 - F weigh them; otherwise the first carries the whole radiance): the reflection alone
+/// on total internal reflection; both, up to `branch_depth`; past it one, chosen with
+/// probability F (drawn from `rng`: the estimator stays unbiased). The reflected ray stays in
+/// the medium it came from, the refracted one changes it.
 fn branches(
     s: &Scatter,
     segment: u32,
     settings: &TraceSettings,
     rng: &mut Rng,
-) -> (Branch, Branch) {
+) -> (Branch, Branch, bool) {
     let reflected = s.reflected.map(|w| (w, s.from_below));
     let refracted = |t: Option<Vec3>| t.map(|w| (w, !s.from_below));
     match s.refracted {
-        None => (reflected, None),
-        Some(t) if segment < settings.branch_depth => (reflected, refracted(t)),
+        None => (reflected, None, false),
+        Some(t) if segment < settings.branch_depth => (reflected, refracted(t), true),
         Some(t) => {
             if rng.f32() < s.fresnel {
-                (reflected, None)
+                (reflected, None, false)
             } else {
-                (refracted(t), None)
+                (refracted(t), None, false)
             }
         }
-    }
-}
-
-/// The radiance a hit sends back from its branches' radiances (see [`branches`]).
-fn combine(s: &Scatter, segment: u32, settings: &TraceSettings, first: Vec3, second: Vec3) -> Vec3 {
-    match s.refracted {
-        Some(_) if segment < settings.branch_depth => {
-            s.fresnel * first + (1.0 - s.fresnel) * second
-        }
-        _ => first,
     }
 }
 

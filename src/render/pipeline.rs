@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use super::film::{Film, PixelState, Samples};
-use super::integrator::{highest_vertex_y, max_descent_slope};
+use super::integrator::{highest_vertex_y, max_slope};
 use super::{Camera, Counters, SceneRef, TraceSettings, render_image_samples};
 use crate::accel::bvh::Bvh;
 #[cfg(feature = "embree")]
@@ -315,8 +315,7 @@ fn prepare_built(cfg: &SceneConfig, refittable: bool) -> Result<Prepared, Render
             let (mesh, stats) = tessellate(&lod, &ocean.sampler(cfg.camera.position_m))?;
             Ok((ocean, seconds_ocean, mesh, stats, t.elapsed().as_secs_f64()))
         })?;
-    let (skip_slope, skip_above_y) =
-        pool.install(|| (max_descent_slope(&mesh), highest_vertex_y(&mesh)));
+    let (skip_slope, skip_above_y) = pool.install(|| (max_slope(&mesh), highest_vertex_y(&mesh)));
     let mesh = Arc::new(mesh);
     let (accel, seconds_build, embree_version): (Box<dyn Accel>, f64, Option<String>) =
         match cfg.render.backend {
@@ -422,7 +421,7 @@ impl Prepared {
         let mesh = self.accel.mesh();
         (self.skip_slope, self.skip_above_y) = self
             .pool
-            .install(|| (max_descent_slope(mesh), highest_vertex_y(mesh)));
+            .install(|| (max_slope(mesh), highest_vertex_y(mesh)));
         let seconds_geometry = t.elapsed().as_secs_f64() - seconds_refit;
         Ok(FrameUpdate {
             seconds_ocean,
