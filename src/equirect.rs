@@ -31,7 +31,8 @@ pub fn pixel_direction(x: f32, y: f32, w: f32, h: f32) -> Vec3 {
 }
 
 /// The continuous pixel position of direction `d` (any non-zero length) in a `w` x `h`
-/// full-sphere image: the inverse of [`pixel_direction`], azimuth in [0, w).
+/// full-sphere image: the inverse of [`pixel_direction`], azimuth in [0, w] (w only by
+/// rounding; [`crate::sky::lookup`] wraps it).
 #[inline]
 pub fn direction_pixel(d: Vec3, w: f32, h: f32) -> (f32, f32) {
     let az = atan2(d.z, d.x).rem_euclid(f32c::TAU);
@@ -44,8 +45,9 @@ pub fn direction_pixel(d: Vec3, w: f32, h: f32) -> (f32, f32) {
 /// takes two, and libm's `atan2f` and `asinf` calls were 6 % of the default render's trace.
 /// The kernel is Cephes' `atanf` (S. L. Moshier): reduction to |t| <= tan(pi/8) by
 /// atan(t) = pi/4 + atan((t - 1) / (t + 1)), then an odd polynomial of degree 9. Zeros and
-/// infinities give what libm gives (atan2(+-0, -0) = +-pi), NaN gives NaN. The division and square roots on a lookup's path are what it costs
-/// (the sky's time is latency, not instruction count).
+/// infinities give what libm gives (atan2(+-0, -0) = +-pi), NaN gives NaN. The division and
+/// square roots on a lookup's path are what it costs (the sky's time is latency, not
+/// instruction count).
 #[inline]
 pub fn atan2(y: f32, x: f32) -> f32 {
     let (ax, ay) = (x.abs(), y.abs());

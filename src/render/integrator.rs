@@ -540,9 +540,9 @@ impl SceneRef<'_> {
     /// past `branch_depth`), then the second (its refraction, while both are followed). One
     /// sample's path is a chain of dependent long-latency steps (square roots, divisions, texel
     /// reads); a stage over 16 independent samples lets the processor overlap them. A sample's
-    /// subtrees are still finished in the scalar path's depth-first order, first branch before
-    /// second, whatever else the batch holds, so its random numbers are drawn in the same
-    /// order.
+    /// subtrees are still finished depth first, first branch before second, whatever else the
+    /// batch holds, so its random numbers are drawn in the same order as in a batch of one
+    /// (`--pass` renders merge into the single render bit for bit because of this).
     fn radiance_batch(
         &self,
         entries: &[PathVertex],
@@ -598,8 +598,8 @@ impl SceneRef<'_> {
         }
         let shaded = &shaded[..n_shaded];
 
-        // The branches: which each hit follows (drawing a sample's random choice here, as the
-        // scalar path does before descending), then each batch of branches in turn.
+        // The branches: which each hit follows (drawing a sample's random choice here, before
+        // its subtrees), then each batch of branches in turn.
         let mut first = [None; CAMERA_BATCH];
         let mut second = [None; CAMERA_BATCH];
         let mut both = [false; CAMERA_BATCH];
