@@ -58,6 +58,7 @@ fn scene_ref<'a>(
         accel,
         skip_slope: None,
         skip_above_y: None,
+        predict_camera_hits: false,
         ocean: Some(sampler),
         earth_radius_m,
         sky,
@@ -362,6 +363,7 @@ fn skipping_rays_that_cannot_return_changes_no_pixel() {
         let scene = SceneRef {
             skip_slope,
             skip_above_y,
+            predict_camera_hits: false,
             accel: accel.as_ref(),
             ocean: Some(sampler),
             earth_radius_m: 6_371_000.0,
@@ -527,10 +529,11 @@ fn rays_spawned_from_far_hits_never_rehit_their_own_triangle() {
     }
 }
 
-/// Traces every `stride`-th pixel's `n` jittered camera rays as one batch (what the film does)
-/// and one by one (a batch of one each): hit for hit, radiance bit for bit, count for count. A
-/// sample's result must not depend on what else its batch holds, or a render split into passes
-/// would not merge into the single render. Returns the counts and the number of pixels.
+/// Traces every `stride`-th pixel's `n` jittered camera rays as one batch (what the film does,
+/// with the triangle its centre ray predicts) and one by one (a batch of one each, with the same
+/// prediction): hit for hit, radiance bit for bit, count for count. A sample's result must not
+/// depend on what else its batch holds, or a render split into passes would not merge into the
+/// single render. Returns the counts and the number of pixels.
 fn assert_batches_match_single_rays(
     scene: &SceneRef,
     settings: &TraceSettings,
@@ -561,10 +564,31 @@ fn assert_batches_match_single_rays(
             accel.intersect_many(&rays, &mut hits);
             let mut rngs: Vec<Rng> = (0..rays.len()).map(rng).collect();
             let mut out = vec![Vec3::ZERO; rays.len()];
-            scene.radiance_camera_batch(&rays, settings, &mut rngs, &mut packed, &mut out);
+            let centre = camera.direction(x as f32 + 0.5, y as f32 + 0.5).to_array();
+            let centre = Ray::new(origin, centre);
+            let predicted = scene.predict_camera_prim(&centre, &mut packed);
+            assert_eq!(predicted, scene.predict_camera_prim(&centre, &mut single));
+            scene.radiance_camera_batch(
+                &rays,
+                predicted,
+                settings,
+                &mut rngs,
+                &mut packed,
+                &mut out,
+            );
             for (s, ray) in rays.iter().enumerate() {
                 assert_eq!(hits[s], accel.intersect(ray), "{} {ray:?}", accel.name());
-                let l = scene.radiance(ray, false, 0, settings, &mut rng(s), &mut single);
+                let mut l = [Vec3::ZERO];
+                let one = std::slice::from_ref(ray);
+                scene.radiance_camera_batch(
+                    one,
+                    predicted,
+                    settings,
+                    &mut [rng(s)],
+                    &mut single,
+                    &mut l,
+                );
+                let l = l[0];
                 assert_eq!(
                     l.to_array().map(f32::to_bits),
                     out[s].to_array().map(f32::to_bits),
@@ -624,6 +648,7 @@ fn camera_batches_give_the_same_hits_and_radiance_as_single_rays() {
         let scene = SceneRef {
             skip_slope: slope,
             skip_above_y: top,
+            predict_camera_hits: true,
             ..scene_ref(accel.as_ref(), sampler, 6_371_000.0, &sky)
         };
         // Full batches, a partial one, a lone ray.
@@ -636,7 +661,7 @@ fn camera_batches_give_the_same_hits_and_radiance_as_single_rays() {
                 n,
             );
             assert!(
-                c.hits > 10 * pixels * n as u64 / 16 && c.skipped_above > 0,
+                c.hits > 10 * pixels * n as u64 / 16 && c.skipped_above > 0 && c.predicted > 0,
                 "{c:?}"
             );
         }
@@ -674,5 +699,169 @@ fn camera_batches_give_the_same_hits_and_radiance_as_single_rays() {
                 "{c:?}"
             );
         }
+    }
+}
+
+/// A camera ray descending more steeply than the mesh slopes crosses it once, so the hit it
+/// finds on its pixel's predicted triangle is the BVH's closest hit, up to rounding; a shallower
+/// ray must not take the predicted hit, which a crest in front may hide.
+#[test]
+fn predicted_camera_hits_are_the_closest_hits() {
+    use vastocean::render::integrator::{Counters, max_slope};
+    let ocean = small_ocean(0.8);
+    let sampler = ocean.sampler([0.0, 0.0]);
+    let mesh = ocean_grid(&sampler, 40.0, 0.5);
+    let slope = max_slope(&mesh);
+    let sky = Sky::analytic(AnalyticSky::default());
+    let camera = equirect(128, Some((0.0, -70.0)));
+    for accel in crate::common::backends(mesh) {
+        let scene = |predict| SceneRef {
+            skip_slope: slope,
+            predict_camera_hits: predict,
+            ..scene_ref(accel.as_ref(), sampler, 6_371_000.0, &sky)
+        };
+        // The whole integrator: the same counts (every predicted ray has its hit), and pixels
+        // that differ only where rounding moved a hit.
+        let render = |predict| {
+            render_image(
+                &scene(predict),
+                &camera,
+                2.0,
+                16,
+                0,
+                &TraceSettings::default(),
+                0,
+                false,
+            )
+        };
+        let ((off, c_off), (on, mut c_on)) = (render(false), render(true));
+        assert!(
+            c_on.predicted > c_on.hits / 2 && c_on.prediction_rays > 0 && c_off.predicted == 0,
+            "{c_on:?}"
+        );
+        // (The timing fields differ run to run.)
+        (c_on.predicted, c_on.prediction_rays) = (0, 0);
+        c_on.normal_timed_ns = c_off.normal_timed_ns;
+        c_on.normal_timed_twice_ns = c_off.normal_timed_twice_ns;
+        assert_eq!(c_on, c_off, "{}", accel.name());
+        let d = mean_abs_luminance_difference(&off.image, &on.image);
+        let mean =
+            on.image.pixels.iter().map(|p| p[1] as f64).sum::<f64>() / on.image.pixels.len() as f64;
+        assert!(d < 1e-3 * mean, "{} {d} {mean}", accel.name());
+
+        // Ray by ray: the predicted hit is the closest hit.
+        let s = scene(true);
+        let mut c = Counters::default();
+        let mut checked = 0;
+        for y in 0..camera.height {
+            for x in (0..camera.width).step_by(3) {
+                let ray = |jx: f32, jy: f32| {
+                    Ray::new(
+                        [0.0, 2.0, 0.0],
+                        camera.direction(x as f32 + jx, y as f32 + jy).into(),
+                    )
+                };
+                let Some(prim) = s.predict_camera_prim(&ray(0.5, 0.5), &mut c) else {
+                    continue;
+                };
+                for j in 0..8 {
+                    let r = ray((j as f32 + 0.5) / 8.0, (j as f32 * 0.37 + 0.1).fract());
+                    let tri = accel.mesh().triangle(prim);
+                    let Some((t, _, _)) = vastocean::accel::bvh::intersect_triangle(&r, tri) else {
+                        continue;
+                    };
+                    let h = accel.intersect(&r).expect("a hit");
+                    checked += 1;
+                    assert!((h.t - t).abs() <= 1e-5 * t, "{r:?} {h:?} {t} on {prim}");
+                }
+            }
+        }
+        assert!(checked > 1000, "{checked}");
+    }
+
+    // A ridge of slope 0.5 across the view, 14 to 18 m out, on a flat sea: a ray descending at
+    // 0.1 meets its front, leaves through its back and meets the flat beyond; one at 0.8
+    // meets the flat before the ridge. Each triangle has its own vertices, the vertex normals
+    // its face normal, so where a ray hits shows in its radiance.
+    let profile = [
+        (-50.0f32, 0.0f32),
+        (14.0, 0.0),
+        (16.0, 1.0),
+        (18.0, 0.0),
+        (50.0, 0.0),
+    ];
+    let (mut positions, mut normals, mut indices) = (vec![], vec![], vec![]);
+    for w in profile.windows(2) {
+        let [(z0, y0), (z1, y1)] = [w[0], w[1]];
+        let quad = [
+            [-50.0, y0, z0],
+            [-50.0, y1, z1],
+            [50.0, y1, z1],
+            [50.0, y0, z0],
+        ];
+        for tri in [[0, 1, 2], [0, 2, 3]] {
+            let p = tri.map(|i| Vec3::from(quad[i]));
+            let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
+            assert!(n.y > 0.0, "wound facing up");
+            let base = positions.len() as u32;
+            positions.extend(p.map(|p| p.to_array()));
+            normals.extend([n.to_array(); 3]);
+            indices.push([base, base + 1, base + 2]);
+        }
+    }
+    let ridge = Mesh::new(positions, normals, vec![], indices).unwrap();
+    assert_eq!(max_slope(&ridge), Some(0.5));
+    let settings = TraceSettings {
+        normals: NormalMode::Vertex,
+        ..TraceSettings::default()
+    };
+    let camera_ray = |slope: f32| {
+        Ray::new(
+            [0.0, 2.0, 0.0],
+            Vec3::new(0.0, -slope, 1.0).normalize().into(),
+        )
+    };
+    let (shallow, steep) = (camera_ray(0.1), camera_ray(0.8));
+    for accel in crate::common::backends(ridge) {
+        let scene = SceneRef {
+            skip_slope: Some(0.5),
+            predict_camera_hits: true,
+            ocean: None,
+            ..scene_ref(accel.as_ref(), sampler, f64::INFINITY, &sky)
+        };
+        // The triangle a ray meets among the flat sea's past the ridge (6, 7) or before it.
+        let meets = |ray: &Ray, prims: std::ops::Range<u32>| {
+            prims
+                .into_iter()
+                .find(|&p| {
+                    vastocean::accel::bvh::intersect_triangle(ray, accel.mesh().triangle(p))
+                        .is_some()
+                })
+                .expect("a hit")
+        };
+        let (far_flat, near_flat) = (meets(&shallow, 6..8), meets(&steep, 0..2));
+        let alone = |ray: &Ray, predicted| {
+            let mut c = Counters::default();
+            let mut l = [Vec3::ZERO];
+            let mut rng = [vastocean::rng::Rng::keyed(&[1])];
+            scene.radiance_camera_batch(&[*ray], predicted, &settings, &mut rng, &mut c, &mut l);
+            (l[0], c)
+        };
+        let (traced, _) = alone(&shallow, None);
+        let (with_prediction, c) = alone(&shallow, Some(far_flat));
+        assert_eq!(c.predicted, 0, "{}", accel.name());
+        assert_eq!(with_prediction, traced, "{}", accel.name());
+        // Had it taken the flat's hit, it would see what a parallel ray starting past the
+        // ridge sees, which differs (the check above can fail).
+        let past = Ray::new([0.0, 0.2, 18.0], shallow.dir);
+        let (on_flat, _) = alone(&past, None);
+        assert!(
+            (traced - on_flat).length() > 1e-3 * on_flat.length(),
+            "{traced} {on_flat}"
+        );
+        // Steeper than the ridge: the predicted flat triangle before it is taken.
+        let (l, c) = alone(&steep, Some(near_flat));
+        assert_eq!(c.predicted, 1, "{}", accel.name());
+        assert!((l - alone(&steep, None).0).length() <= 1e-5 * l.length());
     }
 }

@@ -316,6 +316,11 @@ pub fn render_image_samples(
                         let mut rot = Rng::keyed(&[seed, pixel, u64::MAX - b as u64]);
                         (rot.f64(), rot.f64())
                     });
+                    // The triangle the pixel's centre ray hits, which its camera rays take
+                    // without the BVH where they can (see `SceneRef::predict_camera_prim`).
+                    let centre = camera.direction(x as f32 + 0.5, y as f32 + 0.5);
+                    let predicted =
+                        scene.predict_camera_prim(&Ray::new(origin, centre.to_array()), &mut c);
                     // The pixel's samples go to the integrator CAMERA_BATCH at a time, so that
                     // their camera rays are traced together (one Embree packet).
                     let mut sample_ids = (samples.pass as u32..spp).step_by(samples.passes);
@@ -345,6 +350,7 @@ pub fn render_image_samples(
                         let mut ls = [Vec3::ZERO; CAMERA_BATCH];
                         scene.radiance_camera_batch(
                             &rays[..n],
+                            predicted,
                             settings,
                             &mut rngs[..n],
                             &mut c,

@@ -102,6 +102,14 @@ pub struct Counters {
     /// traced (the camera's upper half, for one). Absent from pass files written before it.
     #[serde(default)]
     pub skipped_above: u64,
+    /// Camera rays whose hit was found on their pixel's predicted triangle, without the BVH
+    /// (counted in `rays` too; see [`SceneRef::predict_camera_prim`]). Absent from pass files
+    /// written before it.
+    #[serde(default)]
+    pub predicted: u64,
+    /// Rays traced through the pixels' centres to predict those triangles (not in `rays`).
+    #[serde(default)]
+    pub prediction_rays: u64,
     /// Mapped-normal evaluations; of every 64, one is timed alone (`normal_timed`, with
     /// `normal_timed_ns` in all) and one is timed followed by a second, discarded evaluation of
     /// the same normal (`normal_timed_twice`, `normal_timed_twice_ns`; absent from pass files
@@ -130,6 +138,8 @@ impl std::ops::AddAssign for Counters {
         self.skipped += o.skipped;
         self.skipped_rising += o.skipped_rising;
         self.skipped_above += o.skipped_above;
+        self.predicted += o.predicted;
+        self.prediction_rays += o.prediction_rays;
         self.normal_evals += o.normal_evals;
         self.normal_timed += o.normal_timed;
         self.normal_timed_ns += o.normal_timed_ns;
@@ -273,6 +283,10 @@ pub struct SceneRef<'a> {
     /// From [`highest_vertex_y`]: rays in the air leaving upwards from above this height are
     /// not traced (nothing lies above it) and see the sky directly. `None` traces every ray.
     pub skip_above_y: Option<f32>,
+    /// Camera rays take their hit from their pixel's predicted triangle where that is exact
+    /// ([`SceneRef::predict_camera_prim`]; needs `skip_slope`). The hits differ from the BVH's
+    /// only by rounding.
+    pub predict_camera_hits: bool,
     /// The ocean, for mapped normals (required for `NormalMode::Mapped`).
     pub ocean: Option<Sampler<'a>>,
     pub earth_radius_m: f64,
@@ -495,6 +509,7 @@ impl SceneRef<'_> {
         let mut out = [Vec3::ZERO];
         self.radiance_batch(
             &[vertex],
+            None,
             segment,
             settings,
             std::slice::from_mut(rng),
@@ -504,13 +519,42 @@ impl SceneRef<'_> {
         out[0]
     }
 
-    /// Radiance along camera rays (in the air, first segment), bit for bit what
-    /// [`Self::radiance`] gives each one alone (and the same counts), computed together: see
+    /// Whether a ray descends more steeply than any slope of the mesh ([`max_slope`]): along
+    /// it the height above the surface only falls, so it crosses the surface at most once.
+    #[inline]
+    fn descends_steeply(&self, d: Vec3) -> bool {
+        self.skip_slope
+            .is_some_and(|slope| d.y < 0.0 && -d.y > slope * (d.x * d.x + d.z * d.z).sqrt())
+    }
+
+    /// The triangle a pixel's camera rays are predicted to hit: the one its centre ray `ray`
+    /// hits, when that ray descends more steeply than the mesh ever slopes (`None` otherwise,
+    /// for a miss, and when `predict_camera_hits` is off). Such a ray crosses the surface at most once, so for a camera ray that
+    /// descends as steeply, a hit on this triangle is its closest hit: the BVH need not be
+    /// searched ([`Self::radiance_camera_batch`]). The centre ray depends on the pixel alone,
+    /// so a sample's hit does not depend on which other samples a render or a pass takes.
+    pub fn predict_camera_prim(&self, ray: &Ray, c: &mut Counters) -> Option<u32> {
+        if !self.predict_camera_hits
+            || !self.descends_steeply(Vec3::from(ray.dir))
+            || !ray.is_finite()
+        {
+            return None;
+        }
+        c.prediction_rays += 1;
+        self.accel.intersect(ray).map(|h| h.prim)
+    }
+
+    /// Radiance along camera rays (in the air, first segment), computed together: see
     /// [`Self::radiance_batch`]. At most [`CAMERA_BATCH`] rays; `rngs[i]` is ray i's generator
-    /// and `out[i]` receives its radiance.
+    /// and `out[i]` receives its radiance. `predicted`: the pixel's triangle from
+    /// [`Self::predict_camera_prim`]; a ray that descends more steeply than the mesh slopes and
+    /// meets it takes that hit (Woop's watertight test, as the Rust BVH computes it) instead of
+    /// the BVH's. Each ray's result is bit for bit what it gets in a batch of one with the same
+    /// prediction (and [`Self::radiance`]'s without one, up to the rounding of its hit).
     pub fn radiance_camera_batch(
         &self,
         rays: &[Ray],
+        predicted: Option<u32>,
         settings: &TraceSettings,
         rngs: &mut [Rng],
         c: &mut Counters,
@@ -527,7 +571,7 @@ impl SceneRef<'_> {
                 in_water: false,
             };
         }
-        self.radiance_batch(&entries[..n], 0, settings, rngs, c, out);
+        self.radiance_batch(&entries[..n], predicted, 0, settings, rngs, c, out);
     }
 
     /// The radiance of up to [`CAMERA_BATCH`] rays at `segment`, each from a different sample
@@ -543,9 +587,11 @@ impl SceneRef<'_> {
     /// subtrees are still finished depth first, first branch before second, whatever else the
     /// batch holds, so its random numbers are drawn in the same order as in a batch of one
     /// (`--pass` renders merge into the single render bit for bit because of this).
+    #[allow(clippy::too_many_arguments)]
     fn radiance_batch(
         &self,
         entries: &[PathVertex],
+        predicted: Option<u32>,
         segment: u32,
         settings: &TraceSettings,
         rngs: &mut [Rng],
@@ -572,11 +618,38 @@ impl SceneRef<'_> {
             return;
         }
         let mut hits = [None; CAMERA_BATCH];
-        if m >= PACKET_MIN {
-            self.accel.intersect_many(&traced[..m], &mut hits[..m]);
-        } else {
-            for (h, r) in hits.iter_mut().zip(&traced[..m]) {
-                *h = self.accel.intersect(r);
+        match predicted {
+            None => self.intersect_batch(&traced[..m], &mut hits[..m]),
+            Some(prim) => {
+                // Rays that meet the predicted triangle steeply enough have their hit; the
+                // rest go to the BVH together.
+                let tri = self.accel.mesh().triangle(prim);
+                let mut rest = [PathVertex::NONE.ray; CAMERA_BATCH];
+                let mut rest_of = [0u8; CAMERA_BATCH];
+                let mut r = 0;
+                for (i, ray) in traced[..m].iter().enumerate() {
+                    let on_prim = if self.descends_steeply(Vec3::from(ray.dir)) {
+                        crate::accel::bvh::intersect_triangle(ray, tri)
+                    } else {
+                        None
+                    };
+                    match on_prim {
+                        Some((t, u, v)) => {
+                            c.predicted += 1;
+                            hits[i] = Some(Hit { t, prim, u, v });
+                        }
+                        None => {
+                            rest[r] = *ray;
+                            rest_of[r] = i as u8;
+                            r += 1;
+                        }
+                    }
+                }
+                let mut rest_hits = [None; CAMERA_BATCH];
+                self.intersect_batch(&rest[..r], &mut rest_hits[..r]);
+                for (&i, h) in rest_of[..r].iter().zip(rest_hits) {
+                    hits[i as usize] = h;
+                }
             }
         }
 
@@ -627,7 +700,15 @@ impl SceneRef<'_> {
             }
             if b > 0 {
                 let mut lb = [Vec3::ZERO; CAMERA_BATCH];
-                self.radiance_batch(&batch[..b], segment + 1, settings, rngs, c, &mut lb[..b]);
+                self.radiance_batch(
+                    &batch[..b],
+                    None,
+                    segment + 1,
+                    settings,
+                    rngs,
+                    c,
+                    &mut lb[..b],
+                );
                 for (&j, lb) in of[..b].iter().zip(lb) {
                     l[j as usize] = lb;
                 }
@@ -640,6 +721,17 @@ impl SceneRef<'_> {
                 l_first[j]
             };
             out[*k as usize] = s.attenuation * l;
+        }
+    }
+
+    /// Closest hits of a batch of rays: one packet, or one by one when it would hold too few.
+    fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        if rays.len() >= PACKET_MIN {
+            self.accel.intersect_many(rays, hits);
+        } else {
+            for (h, r) in hits.iter_mut().zip(rays) {
+                *h = self.accel.intersect(r);
+            }
         }
     }
 
@@ -660,11 +752,7 @@ impl SceneRef<'_> {
             return Some(Vec3::ZERO);
         }
         let d = Vec3::from(ray.dir);
-        if in_water
-            && let Some(slope) = self.skip_slope
-            && d.y < 0.0
-            && -d.y > slope * (d.x * d.x + d.z * d.z).sqrt()
-        {
+        if in_water && self.descends_steeply(d) {
             c.skipped += 1;
             return Some(Vec3::from(settings.upwelling));
         }

@@ -495,6 +495,7 @@ impl Prepared {
             accel: self.accel.as_ref(),
             skip_slope: self.skip_slope,
             skip_above_y: self.skip_above_y,
+            predict_camera_hits: true,
             ocean: Some(sampler),
             earth_radius_m: self.lod.earth_radius_m,
             sky: &self.sky,
