@@ -707,7 +707,7 @@ fn camera_batches_give_the_same_hits_and_radiance_as_single_rays() {
 /// ray must not take the predicted hit, which a crest in front may hide.
 #[test]
 fn predicted_camera_hits_are_the_closest_hits() {
-    use vastocean::render::integrator::{Counters, max_slope};
+    use vastocean::render::integrator::{Counters, hit_on_triangle, max_slope};
     let ocean = small_ocean(0.8);
     let sampler = ocean.sampler([0.0, 0.0]);
     let mesh = ocean_grid(&sampler, 40.0, 0.5);
@@ -766,13 +766,19 @@ fn predicted_camera_hits_are_the_closest_hits() {
                 };
                 for j in 0..8 {
                     let r = ray((j as f32 + 0.5) / 8.0, (j as f32 * 0.37 + 0.1).fract());
-                    let tri = accel.mesh().triangle(prim);
-                    let Some((t, _, _)) = vastocean::accel::bvh::intersect_triangle(&r, tri) else {
+                    let tri = accel.mesh().triangle(prim).map(Vec3::from);
+                    let Some(p) = hit_on_triangle(&r, tri, prim) else {
                         continue;
                     };
                     let h = accel.intersect(&r).expect("a hit");
                     checked += 1;
-                    assert!((h.t - t).abs() <= 1e-5 * t, "{r:?} {h:?} {t} on {prim}");
+                    assert!((h.t - p.t).abs() <= 1e-5 * p.t, "{r:?} {h:?} {p:?}");
+                    if h.prim == prim {
+                        assert!(
+                            (h.u - p.u).abs() < 1e-4 && (h.v - p.v).abs() < 1e-4,
+                            "{h:?} {p:?}"
+                        );
+                    }
                 }
             }
         }
