@@ -619,19 +619,35 @@ impl SceneRef<'_> {
         out: &mut [Vec3],
     ) {
         debug_assert!(entries.len() <= CAMERA_BATCH && out.len() == entries.len());
-        // Answered without the BVH, or traced together.
+        // Answered without the BVH, from the sky (all together), or traced together.
         let mut traced = [PathVertex::NONE.ray; CAMERA_BATCH];
         let mut traced_entry = [0u8; CAMERA_BATCH];
         let mut m = 0;
+        let (mut sky_org, mut sky_dir) = ([Vec3::ZERO; CAMERA_BATCH], [Vec3::ZERO; CAMERA_BATCH]);
+        let mut sky_entry = [0u8; CAMERA_BATCH];
+        let mut n_sky = 0;
         for (k, e) in entries.iter().enumerate() {
             match self.answer_untraced(&e.ray, e.in_water, e.parent.is_some(), segment, settings, c)
             {
-                Some(l) => out[k] = l,
-                None => {
+                Untraced::Known(l) => out[k] = l,
+                Untraced::Sky => {
+                    (sky_org[n_sky], sky_dir[n_sky]) = (e.ray.org.into(), e.ray.dir.into());
+                    sky_entry[n_sky] = k as u8;
+                    n_sky += 1;
+                }
+                Untraced::Trace => {
                     traced[m] = e.ray;
                     traced_entry[m] = k as u8;
                     m += 1;
                 }
+            }
+        }
+        if n_sky > 0 {
+            let mut l = [Vec3::ZERO; CAMERA_BATCH];
+            let (orgs, dirs) = (&sky_org[..n_sky], &sky_dir[..n_sky]);
+            self.sky.radiance_many(orgs, dirs, &mut l[..n_sky]);
+            for (&k, l) in sky_entry[..n_sky].iter().zip(l) {
+                out[k as usize] = l;
             }
         }
         if m == 0 {
@@ -755,8 +771,8 @@ impl SceneRef<'_> {
         }
     }
 
-    /// The radiance of a ray answered without the BVH: cut at `max_segments`, or known to
-    /// miss the surface (the skip shortcuts). `None` when it must be traced, which is counted.
+    /// Whether a ray is answered without the BVH: cut at `max_segments`, or known to miss the
+    /// surface (the skip shortcuts), which is counted, as is a ray that must be traced.
     /// `spawned`: the ray leaves a hit (on the side of the triangle it travels in).
     fn answer_untraced(
         &self,
@@ -766,15 +782,15 @@ impl SceneRef<'_> {
         segment: u32,
         settings: &TraceSettings,
         c: &mut Counters,
-    ) -> Option<Vec3> {
+    ) -> Untraced {
         if segment >= settings.max_segments {
             c.truncated += 1;
-            return Some(Vec3::ZERO);
+            return Untraced::Known(Vec3::ZERO);
         }
         let d = Vec3::from(ray.dir);
         if in_water && self.descends_steeply(d) {
             c.skipped += 1;
-            return Some(Vec3::from(settings.upwelling));
+            return Untraced::Known(Vec3::from(settings.upwelling));
         }
         // (A ray with a NaN or infinite component is left to the backend, which counts it.)
         if !in_water
@@ -784,7 +800,7 @@ impl SceneRef<'_> {
             && ray.is_finite()
         {
             c.skipped_above += 1;
-            return Some(self.sky.radiance(Vec3::from(ray.org), d));
+            return Untraced::Sky;
         }
         // The same argument as in the water, mirrored: a ray leaving a hit into the air (so
         // starting on or above the surface) and rising more steeply than the surface ever
@@ -798,10 +814,10 @@ impl SceneRef<'_> {
             && ray.is_finite()
         {
             c.skipped_rising += 1;
-            return Some(self.sky.radiance(Vec3::from(ray.org), d));
+            return Untraced::Sky;
         }
         c.rays += 1;
-        None
+        Untraced::Trace
     }
 
     /// What a traced ray that met nothing sees: the sky, or in the water the upwelling light.
@@ -882,6 +898,16 @@ impl SceneRef<'_> {
             refracted,
         }
     }
+}
+
+/// How [`SceneRef::answer_untraced`] answers a ray.
+enum Untraced {
+    /// Its radiance, known without the BVH.
+    Known(Vec3),
+    /// It cannot meet the surface: the sky's radiance along it.
+    Sky,
+    /// The BVH must find its hit.
+    Trace,
 }
 
 /// One ray of a batch in [`SceneRef::radiance_batch`]: sample `sample`'s ray, spawned on

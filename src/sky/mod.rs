@@ -118,27 +118,92 @@ impl AnalyticSky {
                 sun_radiance,
                 sky_scale,
                 ..
-            } => {
-                let cos_g = d.dot(sun).clamp(-1.0, 1.0);
-                let gamma = cos_g.acos();
-                if gamma < SUN_RADIUS_RAD {
-                    return Vec3::splat(sun_radiance) * SUN_COLOUR;
-                }
-                let up = d.y.max(0.0);
-                let zenith = Vec3::new(0.25, 0.45, 0.95);
-                let horizon = Vec3::new(0.95, 0.9, 0.85);
-                let base = horizon.lerp(zenith, 1.0 - (-up / 0.12).exp());
-                // Forward-scattering glow around the sun, stronger for a low sun.
-                // exp(-gamma / 0.12) is the fifth power of exp(-gamma / 0.6): one exp, not two.
-                let e = (-gamma / 0.6).exp();
-                let e2 = e * e;
-                let glow = Vec3::new(1.0, 0.75, 0.45) * (3.0 * (e2 * e2 * e) + 0.6 * e);
-                // Light low in the sky drops towards the horizon below a low sun (reddened).
-                sky_scale * (base + glow * (1.0 - 0.7 * sun.y.max(0.0)))
-            }
+            } => Vec3::from(clear_lane(
+                d.to_array(),
+                sun.to_array(),
+                sun_radiance,
+                sky_scale,
+            )),
         }
     }
 }
+
+/// The clear sky's radiance along unit direction `d` with the sun towards `sun`: one lane of a
+/// batch. [`AnalyticSky::radiance_with_sun`] and [`Sky::radiance_many`] both evaluate it, so a
+/// direction gets the same bits alone as in a batch; it is branch-free, its acos and exp
+/// inline, so a loop over lanes vectorises (libm's `acosf` and `expf` calls and the branch at
+/// the sun's disc made the sky a quarter of the default render's trace, latency-bound).
+#[inline(always)]
+fn clear_lane(d: [f32; 3], sun: [f32; 3], sun_radiance: f32, sky_scale: f32) -> [f32; 3] {
+    const ZENITH: [f32; 3] = [0.25, 0.45, 0.95];
+    const HORIZON: [f32; 3] = [0.95, 0.9, 0.85];
+    const GLOW: [f32; 3] = [1.0, 0.75, 0.45];
+    let cos_g = (d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2]).clamp(-1.0, 1.0);
+    let gamma = acos(cos_g);
+    let up = d[1].max(0.0);
+    let s = 1.0 - exp(-up * (1.0 / 0.12));
+    // Forward-scattering glow around the sun, stronger for a low sun.
+    // exp(-gamma / 0.12) is the fifth power of exp(-gamma / 0.6): one exp, not two.
+    let e = exp(-gamma * (1.0 / 0.6));
+    let e2 = e * e;
+    // Light low in the sky drops towards the horizon below a low sun (reddened).
+    let glow = (3.0 * (e2 * e2 * e) + 0.6 * e) * (1.0 - 0.7 * sun[1].max(0.0));
+    let in_disc = gamma < SUN_RADIUS_RAD;
+    std::array::from_fn(|k| {
+        let sky = sky_scale * ((HORIZON[k] + (ZENITH[k] - HORIZON[k]) * s) + GLOW[k] * glow);
+        if in_disc {
+            sun_radiance * SUN_COLOUR.to_array()[k]
+        } else {
+            sky
+        }
+    })
+}
+
+/// acos(x) for x in [-1, 1], within 3e-7 rad of the true angle (an f32 ulp is 2.4e-7 near
+/// pi), branch-free for [`clear_lane`]: Cephes' `acosf` (S. L. Moshier), pi/2 - asin(x) in the
+/// middle and +-2 asin(sqrt((1 -+ x) / 2)) towards +-1, asin an odd polynomial of degree 9 on
+/// [0, 1/2].
+#[inline(always)]
+fn acos(x: f32) -> f32 {
+    let a = x.abs();
+    let outer = a > 0.5;
+    let z_outer = 0.5 * (1.0 - a);
+    let s = if outer { z_outer.sqrt() } else { x };
+    let z = if outer { z_outer } else { x * x };
+    let p = (((4.216_32e-2 * z + 2.418_131e-2) * z + 4.547_002_6e-2) * z + 7.495_300_3e-2) * z
+        + 1.666_675_2e-1;
+    let asin = p * z * s + s;
+    if outer {
+        // acos(x) = 2 asin(sqrt((1 - x) / 2)) for x > 1/2, pi minus that of -x below -1/2
+        let t = 2.0 * asin;
+        if x > 0.0 { t } else { std::f32::consts::PI - t }
+    } else {
+        std::f32::consts::FRAC_PI_2 - asin
+    }
+}
+
+/// e^x for x in [-87, 0] (the clear sky's arguments; clamped to it), within 2 ulp: Cephes'
+/// `expf` (S. L. Moshier), x = n ln 2 + r with |r| <= ln 2 / 2, a polynomial of degree 7 in r,
+/// and 2^n from its exponent bits; branch-free for [`clear_lane`].
+#[inline(always)]
+fn exp(x: f32) -> f32 {
+    let x = x.clamp(-87.0, 0.0);
+    // n = round(x / ln 2) by the 1.5 x 2^23 trick (no rounding instruction on baseline x86-64)
+    const MAGIC: f32 = 12_582_912.0;
+    let shifted = x * std::f32::consts::LOG2_E + MAGIC;
+    let n = shifted - MAGIC;
+    let ni = shifted.to_bits() as i32 - MAGIC.to_bits() as i32;
+    let r = x - n * 0.693_359_4 - n * -2.121_944_4e-4;
+    let p = ((((1.987_569_2e-4 * r + 1.398_2e-3) * r + 8.333_452e-3) * r + 4.166_579_6e-2) * r
+        + 1.666_666_5e-1)
+        * r
+        + 0.5;
+    let e = p * r * r + r + 1.0;
+    e * f32::from_bits(((ni + 127) << 23) as u32)
+}
+
+/// Rays [`Sky::radiance_many`] evaluates side by side.
+pub const SKY_LANES: usize = 16;
 
 /// Where sky radiance comes from.
 #[derive(Clone, Debug)]
@@ -190,23 +255,83 @@ impl Sky {
     /// Radiance arriving along `-dir` at a ray that left `org` (camera-relative metres, y above
     /// the sea level at the camera's nadir) and hit nothing.
     pub fn radiance(&self, org: Vec3, dir: Vec3) -> Vec3 {
-        // From the camera itself the dome is seen along the ray: the camera's rays need no
-        // intersection with it (half of every image looks at the sky).
-        let from_camera = org == Vec3::new(0.0, self.camera_height_m as f32, 0.0);
-        // Towards where the ray meets the dome, seen from the camera: normalised only for the
-        // analytic sky, since a map lookup does not need it (its square root and division were
-        // on every escaped ray's critical path).
-        let (d, unit) = match self.dome_altitude_m {
-            Some(alt) if !from_camera => (self.dome_offset(org, dir, alt), false),
-            _ => (dir, true),
-        };
         self.scale
             * match &self.source {
                 SkySource::Analytic { model, sun } => {
-                    model.radiance_with_sun(if unit { d } else { d.normalize() }, *sun)
+                    model.radiance_with_sun(self.unit_direction(org, dir), *sun)
                 }
-                SkySource::Map(img) => lookup(img, d),
+                SkySource::Map(img) => lookup(img, self.direction(org, dir)),
             }
+    }
+
+    /// [`Self::radiance`] of many rays, `out[i]` for `(orgs[i], dirs[i])`, bit for bit what
+    /// each gets alone. The analytic clear sky is evaluated [`SKY_LANES`] rays at a time, a loop
+    /// the compiler vectorises (one ray's lookup is a chain of dependent square roots,
+    /// divisions and polynomials; side by side they overlap).
+    pub fn radiance_many(&self, orgs: &[Vec3], dirs: &[Vec3], out: &mut [Vec3]) {
+        assert!(orgs.len() == dirs.len() && out.len() == dirs.len());
+        let SkySource::Analytic {
+            model:
+                AnalyticSky::Clear {
+                    sun_radiance,
+                    sky_scale,
+                    ..
+                },
+            sun,
+        } = self.source
+        else {
+            for ((o, d), l) in orgs.iter().zip(dirs).zip(out.iter_mut()) {
+                *l = self.radiance(*o, *d);
+            }
+            return;
+        };
+        let sun = sun.to_array();
+        for ((o, d), out) in orgs
+            .chunks(SKY_LANES)
+            .zip(dirs.chunks(SKY_LANES))
+            .zip(out.chunks_mut(SKY_LANES))
+        {
+            // In lanes (the unused ones look at the zenith), then the sky of every lane.
+            let (mut x, mut y, mut z) = ([0f32; SKY_LANES], [1f32; SKY_LANES], [0f32; SKY_LANES]);
+            for (i, (o, d)) in o.iter().zip(d).enumerate() {
+                [x[i], y[i], z[i]] = self.unit_direction(*o, *d).to_array();
+            }
+            let mut l = [[0f32; 3]; SKY_LANES];
+            for i in 0..SKY_LANES {
+                l[i] = clear_lane([x[i], y[i], z[i]], sun, sun_radiance, sky_scale);
+            }
+            for (out, l) in out.iter_mut().zip(l) {
+                *out = self.scale * Vec3::from(l);
+            }
+        }
+    }
+
+    /// Towards where the ray meets the sky, seen from the camera (see [`Self::direction`]),
+    /// normalised.
+    #[inline]
+    fn unit_direction(&self, org: Vec3, dir: Vec3) -> Vec3 {
+        match self.dome_altitude_m {
+            Some(alt) if !self.at_camera(org) => self.dome_offset(org, dir, alt).normalize(),
+            _ => dir,
+        }
+    }
+
+    /// Towards where the ray meets the sky, seen from the camera: along the ray at infinity and
+    /// from the camera itself (which needs no intersection: half of every image looks at the
+    /// sky), else towards where it meets the dome, not normalised (a map lookup does not need
+    /// it, and its square root and division were on every escaped ray's critical path).
+    #[inline]
+    fn direction(&self, org: Vec3, dir: Vec3) -> Vec3 {
+        match self.dome_altitude_m {
+            Some(alt) if !self.at_camera(org) => self.dome_offset(org, dir, alt),
+            _ => dir,
+        }
+    }
+
+    /// Whether a ray leaves from the camera itself.
+    #[inline]
+    fn at_camera(&self, org: Vec3) -> bool {
+        org == Vec3::new(0.0, self.camera_height_m as f32, 0.0)
     }
 
     /// Downwelling irradiance on a horizontal surface: the radiance of the upper hemisphere
@@ -335,6 +460,90 @@ pub fn lookup(img: &RgbImage, d: Vec3) -> Vec3 {
 mod tests {
     use super::*;
     use glam::DVec3;
+
+    #[test]
+    fn inline_acos_and_exp_agree_with_libm() {
+        let (mut worst_acos, mut worst_exp) = (0f64, 0f64);
+        let n = 200_000;
+        for i in 0..=n {
+            for x in [-1.0 + 2.0 * i as f32 / n as f32, 1.0 - i as f32 * 1e-7] {
+                worst_acos = worst_acos.max((acos(x) as f64 - (x as f64).acos()).abs());
+            }
+            let x = -87.0 * i as f32 / n as f32;
+            let want = (x as f64).exp();
+            worst_exp = worst_exp.max((exp(x) as f64 - want).abs() / want);
+        }
+        assert!(worst_acos < 3e-7, "{worst_acos}");
+        // 2 ulp: f32's epsilon is 1.19e-7
+        assert!(worst_exp < 2.4e-7, "{worst_exp}");
+        assert_eq!((acos(1.0), exp(0.0)), (0.0, 1.0));
+        assert_eq!(acos(-1.0), std::f32::consts::PI);
+        assert!((acos(0.0) - std::f32::consts::FRAC_PI_2).abs() < 1e-7);
+        assert!(exp(-1000.0) > 0.0 && exp(-1000.0) < 1e-37);
+    }
+
+    #[test]
+    fn sky_lookups_in_batches_equal_single_lookups() {
+        let mut sky = Sky::analytic(AnalyticSky::Clear {
+            sun_elevation_deg: 3.0,
+            sun_azimuth_deg: 40.0,
+            sun_radiance: 5e4,
+            sky_scale: 1.0,
+        });
+        sky.dome_altitude_m = Some(200_000.0);
+        let sun = sky_sun(&sky);
+        let mut rng = crate::rng::Rng::keyed(&[11]);
+        let camera = Vec3::new(0.0, sky.camera_height_m as f32, 0.0);
+        // From the camera and from far hits; some through the sun's disc.
+        let rays: Vec<(Vec3, Vec3)> = (0..37)
+            .map(|i| {
+                let org = if i % 3 == 0 {
+                    camera
+                } else {
+                    Vec3::new(
+                        rng.range(-5e3, 5e3),
+                        rng.range(-1.0, 1.0),
+                        rng.range(-5e3, 5e3),
+                    )
+                };
+                let d = if i % 4 == 0 {
+                    sun + 1e-3 * Vec3::new(rng.range(-1.0, 1.0), 0.0, rng.range(-1.0, 1.0))
+                } else {
+                    Vec3::new(
+                        rng.range(-1.0, 1.0),
+                        rng.range(0.0, 1.0),
+                        rng.range(-1.0, 1.0),
+                    )
+                };
+                (org, d.normalize())
+            })
+            .collect();
+        let (orgs, dirs): (Vec<Vec3>, Vec<Vec3>) = rays.iter().copied().unzip();
+        let mut many = vec![Vec3::ZERO; rays.len()];
+        sky.radiance_many(&orgs, &dirs, &mut many);
+        let mut in_disc = 0;
+        for ((o, d), l) in rays.iter().zip(&many) {
+            let alone = sky.radiance(*o, *d);
+            assert_eq!(
+                alone.to_array().map(f32::to_bits),
+                l.to_array().map(f32::to_bits)
+            );
+            in_disc += usize::from(alone.x > 1e3);
+        }
+        assert!(in_disc > 2 && in_disc < rays.len(), "{in_disc}");
+        // The lanes see the dome: a far origin looks elsewhere than the camera does.
+        let far = Vec3::new(0.0, 0.5, 150e3);
+        let mut l = [Vec3::ZERO; 2];
+        sky.radiance_many(&[camera, far], &[Vec3::Z, Vec3::Z], &mut l);
+        assert_ne!(l[0], l[1]);
+    }
+
+    fn sky_sun(sky: &Sky) -> Vec3 {
+        match sky.source {
+            SkySource::Analytic { sun, .. } => sun,
+            SkySource::Map(_) => unreachable!(),
+        }
+    }
 
     #[test]
     fn dome_direction_from_the_camera_is_the_ray_direction() {
