@@ -35,7 +35,9 @@ pub fn pixel_direction(x: f32, y: f32, w: f32, h: f32) -> Vec3 {
 /// rounding; [`crate::sky::lookup`] wraps it).
 #[inline]
 pub fn direction_pixel(d: Vec3, w: f32, h: f32) -> (f32, f32) {
-    let az = atan2(d.z, d.x).rem_euclid(f32c::TAU);
+    // rem_euclid(TAU) of an angle in (-pi, pi], without fmodf
+    let az = atan2(d.z, d.x);
+    let az = if az < 0.0 { az + f32c::TAU } else { az };
     // asin(d.y) for a unit direction, and right for any length.
     let el = atan2(d.y, (d.x * d.x + d.z * d.z).sqrt());
     (az / f32c::TAU * w, (f32c::FRAC_PI_2 - el) / f32c::PI * h)

@@ -265,40 +265,65 @@ impl Sky {
     }
 
     /// [`Self::radiance`] of many rays, `out[i]` for `(orgs[i], dirs[i])`, bit for bit what
-    /// each gets alone. The analytic clear sky is evaluated [`SKY_LANES`] rays at a time, a loop
-    /// the compiler vectorises (one ray's lookup is a chain of dependent square roots,
-    /// divisions and polynomials; side by side they overlap).
+    /// each gets alone. A map and the analytic clear sky are evaluated [`SKY_LANES`] rays at a
+    /// time, in loops the compiler vectorises: one ray's lookup is a chain of dependent square
+    /// roots, divisions and polynomials (a map's two angles, the clear sky's angle to the sun
+    /// and two exponentials); side by side they overlap.
     pub fn radiance_many(&self, orgs: &[Vec3], dirs: &[Vec3], out: &mut [Vec3]) {
         assert!(orgs.len() == dirs.len() && out.len() == dirs.len());
-        let SkySource::Analytic {
-            model:
-                AnalyticSky::Clear {
-                    sun_radiance,
-                    sky_scale,
-                    ..
-                },
-            sun,
-        } = self.source
-        else {
-            for ((o, d), l) in orgs.iter().zip(dirs).zip(out.iter_mut()) {
-                *l = self.radiance(*o, *d);
+        // What the lanes evaluate; the other analytic skies are cheap one by one.
+        enum Lanes<'a> {
+            Map(&'a RgbImage),
+            Clear([f32; 3], f32, f32),
+        }
+        let lanes = match &self.source {
+            SkySource::Map(img) => Lanes::Map(img),
+            SkySource::Analytic {
+                model:
+                    AnalyticSky::Clear {
+                        sun_radiance,
+                        sky_scale,
+                        ..
+                    },
+                sun,
+            } => Lanes::Clear(sun.to_array(), *sun_radiance, *sky_scale),
+            SkySource::Analytic { .. } => {
+                for ((o, d), l) in orgs.iter().zip(dirs).zip(out.iter_mut()) {
+                    *l = self.radiance(*o, *d);
+                }
+                return;
             }
-            return;
         };
-        let sun = sun.to_array();
         for ((o, d), out) in orgs
             .chunks(SKY_LANES)
             .zip(dirs.chunks(SKY_LANES))
             .zip(out.chunks_mut(SKY_LANES))
         {
-            // In lanes (the unused ones look at the zenith), then the sky of every lane.
+            // The directions in lanes (the unused ones look at the zenith), then every lane's
+            // sky: each step exactly what `radiance` does for one ray.
             let (mut x, mut y, mut z) = ([0f32; SKY_LANES], [1f32; SKY_LANES], [0f32; SKY_LANES]);
-            for (i, (o, d)) in o.iter().zip(d).enumerate() {
-                [x[i], y[i], z[i]] = self.unit_direction(*o, *d).to_array();
-            }
             let mut l = [[0f32; 3]; SKY_LANES];
-            for i in 0..SKY_LANES {
-                l[i] = clear_lane([x[i], y[i], z[i]], sun, sun_radiance, sky_scale);
+            match lanes {
+                Lanes::Map(img) => {
+                    for (i, (o, d)) in o.iter().zip(d).enumerate() {
+                        [x[i], y[i], z[i]] = self.direction(*o, *d).to_array();
+                    }
+                    let mut t = [Taps::default(); SKY_LANES];
+                    for i in 0..SKY_LANES {
+                        t[i] = taps([x[i], y[i], z[i]], img.width, img.height);
+                    }
+                    for (l, t) in l.iter_mut().zip(&t[..o.len()]) {
+                        *l = read_taps(img, t);
+                    }
+                }
+                Lanes::Clear(sun, sun_radiance, sky_scale) => {
+                    for (i, (o, d)) in o.iter().zip(d).enumerate() {
+                        [x[i], y[i], z[i]] = self.unit_direction(*o, *d).to_array();
+                    }
+                    for i in 0..SKY_LANES {
+                        l[i] = clear_lane([x[i], y[i], z[i]], sun, sun_radiance, sky_scale);
+                    }
+                }
             }
             for (out, l) in out.iter_mut().zip(l) {
                 *out = self.scale * Vec3::from(l);
@@ -441,19 +466,60 @@ pub fn validate_map(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
 /// Bilinear lookup of an equirectangular map along `d` (any non-zero length), wrapping in
 /// azimuth and clamping at the poles.
 pub fn lookup(img: &RgbImage, d: Vec3) -> Vec3 {
-    let (w, h) = (img.width as f32, img.height as f32);
+    Vec3::from(read_taps(img, &taps(d.to_array(), img.width, img.height)))
+}
+
+/// Where a bilinear lookup reads: columns `xa`, `xb` (wrapped), rows `ya`, `yb` (clamped) and
+/// the weights of `xb` and `yb`.
+#[derive(Clone, Copy, Default)]
+struct Taps {
+    xa: u32,
+    xb: u32,
+    ya: u32,
+    yb: u32,
+    fx: f32,
+    fy: f32,
+}
+
+/// The taps of a `w` x `h` map along `d`: one lane of a batch ([`Sky::radiance_many`] runs it
+/// over many directions in a loop the compiler vectorises; [`lookup`] runs it alone, so a
+/// direction reads the same texels with the same weights either way). The floors are written
+/// as truncations, which vectorise without SSE4.1 (a lane of NaN reads texel 0, weighted NaN).
+#[inline(always)]
+fn taps(d: [f32; 3], w: usize, h: usize) -> Taps {
+    let (wf, hf) = (w as f32, h as f32);
     // Continuous pixel coordinates; texel centres sit at +0.5.
-    let (x, y) = equirect::direction_pixel(d, w, h);
+    let (x, y) = equirect::direction_pixel(Vec3::from(d), wf, hf);
     let x = x - 0.5;
-    let y = (y - 0.5).clamp(0.0, h - 1.0);
-    let (x0, y0) = (x.floor(), y.floor());
-    let (fx, fy) = (x - x0, y - y0);
-    let xi = |x: f32| (x as i64).rem_euclid(img.width as i64) as usize;
-    let (xa, xb) = (xi(x0), xi(x0 + 1.0));
-    let (ya, yb) = (y0 as usize, (y0 as usize + 1).min(img.height - 1));
-    let p = |x, y| Vec3::from(img.get(x, y));
-    (p(xa, ya) * (1.0 - fx) + p(xb, ya) * fx) * (1.0 - fy)
-        + (p(xa, yb) * (1.0 - fx) + p(xb, yb) * fx) * fy
+    let y = (y - 0.5).clamp(0.0, hf - 1.0);
+    // floor(x) for x in [-0.5, w - 0.5]; y >= 0 truncates to its floor
+    let t = x as i32;
+    let x0 = t - i32::from(x < t as f32);
+    let y0 = y as i32;
+    let (fx, fy) = (x - x0 as f32, y - y0 as f32);
+    let (wi, hi) = (w as i32, h as i32);
+    let xa = if x0 < 0 { x0 + wi } else { x0 };
+    let xb = if x0 + 1 >= wi { x0 + 1 - wi } else { x0 + 1 };
+    let clamp = |i: i32, n: i32| i.clamp(0, n - 1) as u32;
+    Taps {
+        xa: clamp(xa, wi),
+        xb: clamp(xb, wi),
+        ya: clamp(y0, hi),
+        yb: clamp(y0 + 1, hi),
+        fx,
+        fy,
+    }
+}
+
+/// The bilinear blend of a lookup's four texels.
+#[inline(always)]
+fn read_taps(img: &RgbImage, t: &Taps) -> [f32; 3] {
+    let p = |x: u32, y: u32| img.get(x as usize, y as usize);
+    let (a, b, c, d) = (p(t.xa, t.ya), p(t.xb, t.ya), p(t.xa, t.yb), p(t.xb, t.yb));
+    let (fx, fy) = (t.fx, t.fy);
+    std::array::from_fn(|k| {
+        (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + d[k] * fx) * fy
+    })
 }
 
 #[cfg(test)]
@@ -484,12 +550,13 @@ mod tests {
 
     #[test]
     fn sky_lookups_in_batches_equal_single_lookups() {
-        let mut sky = Sky::analytic(AnalyticSky::Clear {
+        let model = AnalyticSky::Clear {
             sun_elevation_deg: 3.0,
             sun_azimuth_deg: 40.0,
             sun_radiance: 5e4,
             sky_scale: 1.0,
-        });
+        };
+        let mut sky = Sky::analytic(model);
         sky.dome_altitude_m = Some(200_000.0);
         let sun = sky_sun(&sky);
         let mut rng = crate::rng::Rng::keyed(&[11]);
@@ -519,23 +586,31 @@ mod tests {
             })
             .collect();
         let (orgs, dirs): (Vec<Vec3>, Vec<Vec3>) = rays.iter().copied().unzip();
-        let mut many = vec![Vec3::ZERO; rays.len()];
-        sky.radiance_many(&orgs, &dirs, &mut many);
-        let mut in_disc = 0;
-        for ((o, d), l) in rays.iter().zip(&many) {
-            let alone = sky.radiance(*o, *d);
-            assert_eq!(
-                alone.to_array().map(f32::to_bits),
-                l.to_array().map(f32::to_bits)
-            );
-            in_disc += usize::from(alone.x > 1e3);
+        // The same sky as a map: its lanes compute where to read instead.
+        let mut map = sky.clone();
+        map.source = SkySource::Map(rasterize(&model, 256));
+        for sky in [sky, map] {
+            let mut many = vec![Vec3::ZERO; rays.len()];
+            sky.radiance_many(&orgs, &dirs, &mut many);
+            let mut bright = 0;
+            for ((o, d), l) in rays.iter().zip(&many) {
+                let alone = sky.radiance(*o, *d);
+                assert_eq!(
+                    alone.to_array().map(f32::to_bits),
+                    l.to_array().map(f32::to_bits)
+                );
+                bright += usize::from(alone.x > 1e2);
+            }
+            // (the analytic sun's disc is met; the map's texels are wider than it)
+            let analytic = matches!(sky.source, SkySource::Analytic { .. });
+            assert!(!analytic || (bright > 2 && bright < rays.len()), "{bright}");
+            // The lanes see the dome: a far origin looks elsewhere than the camera does.
+            let far = Vec3::new(0.0, 0.5, 150e3);
+            let mut l = [Vec3::ZERO; 2];
+            let up = Vec3::new(0.0, 0.05, 1.0).normalize();
+            sky.radiance_many(&[camera, far], &[up, up], &mut l);
+            assert_ne!(l[0], l[1]);
         }
-        assert!(in_disc > 2 && in_disc < rays.len(), "{in_disc}");
-        // The lanes see the dome: a far origin looks elsewhere than the camera does.
-        let far = Vec3::new(0.0, 0.5, 150e3);
-        let mut l = [Vec3::ZERO; 2];
-        sky.radiance_many(&[camera, far], &[Vec3::Z, Vec3::Z], &mut l);
-        assert_ne!(l[0], l[1]);
     }
 
     fn sky_sun(sky: &Sky) -> Vec3 {
