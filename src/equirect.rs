@@ -25,9 +25,21 @@ pub fn direction64(el: f64, az: f64) -> DVec3 {
 /// Direction through continuous pixel position (x, y) of a `w` x `h` full-sphere image.
 #[inline]
 pub fn pixel_direction(x: f32, y: f32, w: f32, h: f32) -> Vec3 {
-    let az = f32c::TAU * x / w;
-    let el = f32c::FRAC_PI_2 - f32c::PI * y / h;
+    let (az, el) = pixel_angles(x, y, w, h);
     direction(el, az)
+}
+
+/// Azimuth and elevation (radians) at continuous pixel position (x, y) of a `w` x `h`
+/// full-sphere image.
+#[inline]
+pub fn pixel_angles(x: f32, y: f32, w: f32, h: f32) -> (f32, f32) {
+    (f32c::TAU * x / w, f32c::FRAC_PI_2 - f32c::PI * y / h)
+}
+
+/// How much azimuth and elevation change over (dx, dy) pixels of a `w` x `h` full-sphere image.
+#[inline]
+pub fn pixel_angle_steps(dx: f32, dy: f32, w: f32, h: f32) -> (f32, f32) {
+    (f32c::TAU * dx / w, -(f32c::PI * dy / h))
 }
 
 /// The continuous pixel position of direction `d` (any non-zero length) in a `w` x `h`

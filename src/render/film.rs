@@ -318,7 +318,8 @@ pub fn render_image_samples(
                     });
                     // The triangle the pixel's centre ray hits, which its camera rays take
                     // without the BVH where they can (see `SceneRef::predict_camera_prim`).
-                    let centre = camera.direction(x as f32 + 0.5, y as f32 + 0.5);
+                    let pixel_rays = camera.pixel_rays(x, y);
+                    let centre = pixel_rays.direction(0.5, 0.5);
                     let predicted =
                         scene.predict_camera_prim(&Ray::new(origin, centre.to_array()), &mut c);
                     // The pixel's samples go to the integrator CAMERA_BATCH at a time, so that
@@ -343,7 +344,7 @@ pub fn render_image_samples(
                             let ((ox, oy), j) = (offsets[b], (s as usize / k) as f64);
                             let jx = (ox + j * R2.0).fract() as f32;
                             let jy = (oy + j * R2.1).fract() as f32;
-                            let dir = camera.direction(x as f32 + jx, y as f32 + jy);
+                            let dir = pixel_rays.direction(jx, jy);
                             *ray = Ray::new(origin, dir.to_array());
                             *rng = Rng::keyed(&[seed, pixel, s as u64]);
                         }
