@@ -552,10 +552,11 @@ fn assert_batches_match_single_rays(
             pixels += 1;
             let key = (y * camera.width + x) as u64;
             assert!(n <= CAMERA_BATCH);
+            let pixel_rays = camera.pixel_rays(x, y);
             let rays: Vec<Ray> = (0..n)
                 .map(|s| {
                     let j = (s as f32 + 0.5) / n as f32;
-                    let d = camera.direction(x as f32 + j, y as f32 + (j * 7.0).fract());
+                    let d = pixel_rays.direction(j, (j * 7.0).fract());
                     Ray::new(origin, d.to_array())
                 })
                 .collect();
@@ -564,8 +565,7 @@ fn assert_batches_match_single_rays(
             accel.intersect_many(&rays, &mut hits);
             let mut rngs: Vec<Rng> = (0..rays.len()).map(rng).collect();
             let mut out = vec![Vec3::ZERO; rays.len()];
-            let centre = camera.direction(x as f32 + 0.5, y as f32 + 0.5).to_array();
-            let centre = Ray::new(origin, centre);
+            let centre = Ray::new(origin, pixel_rays.direction(0.5, 0.5).to_array());
             let predicted = scene.predict_camera_prim(&centre, &mut packed);
             assert_eq!(predicted, scene.predict_camera_prim(&centre, &mut single));
             scene.radiance_camera_batch(
@@ -595,6 +595,15 @@ fn assert_batches_match_single_rays(
                     "{} pixel ({x}, {y}) sample {s}",
                     accel.name()
                 );
+                // Without a prediction, a batch of one is what `radiance` gives.
+                if predicted.is_none() {
+                    let mut c = Counters::default();
+                    let alone = scene.radiance(ray, false, 0, settings, &mut rng(s), &mut c);
+                    assert_eq!(
+                        alone.to_array().map(f32::to_bits),
+                        l.to_array().map(f32::to_bits)
+                    );
+                }
             }
         }
     }
@@ -720,8 +729,9 @@ fn predicted_camera_hits_are_the_closest_hits() {
             predict_camera_hits: predict,
             ..scene_ref(accel.as_ref(), sampler, 6_371_000.0, &sky)
         };
-        // The whole integrator: the same counts (every predicted ray has its hit), and pixels
-        // that differ only where rounding moved a hit.
+        // The whole integrator: the same camera rays need a hit (every predicted one has it),
+        // and pixels differ only where rounding moved a hit (which may also move a later
+        // bounce: those counts agree closely, not exactly).
         let render = |predict| {
             render_image(
                 &scene(predict),
@@ -734,39 +744,41 @@ fn predicted_camera_hits_are_the_closest_hits() {
                 false,
             )
         };
-        let ((off, c_off), (on, mut c_on)) = (render(false), render(true));
+        let ((off, c_off), (on, c_on)) = (render(false), render(true));
         assert!(
             c_on.predicted > c_on.hits / 2 && c_on.prediction_rays > 0 && c_off.predicted == 0,
             "{c_on:?}"
         );
-        // (The timing fields differ run to run.)
-        (c_on.predicted, c_on.prediction_rays) = (0, 0);
-        c_on.normal_timed_ns = c_off.normal_timed_ns;
-        c_on.normal_timed_twice_ns = c_off.normal_timed_twice_ns;
-        assert_eq!(c_on, c_off, "{}", accel.name());
+        assert_eq!(
+            (c_on.rays, c_on.escaped_below_horizon),
+            (c_off.rays, c_off.escaped_below_horizon)
+        );
+        assert!(
+            c_on.hits.abs_diff(c_off.hits) <= c_off.hits / 1000,
+            "{c_on:?} {c_off:?}"
+        );
         let d = mean_abs_luminance_difference(&off.image, &on.image);
         let mean =
             on.image.pixels.iter().map(|p| p[1] as f64).sum::<f64>() / on.image.pixels.len() as f64;
         assert!(d < 1e-3 * mean, "{} {d} {mean}", accel.name());
 
-        // Ray by ray: the predicted hit is the closest hit.
+        // Ray by ray: a steep ray's hit on the predicted triangle is the closest hit.
         let s = scene(true);
         let mut c = Counters::default();
         let mut checked = 0;
         for y in 0..camera.height {
             for x in (0..camera.width).step_by(3) {
-                let ray = |jx: f32, jy: f32| {
-                    Ray::new(
-                        [0.0, 2.0, 0.0],
-                        camera.direction(x as f32 + jx, y as f32 + jy).into(),
-                    )
-                };
+                let pixel_rays = camera.pixel_rays(x, y);
+                let ray = |jx, jy| Ray::new([0.0, 2.0, 0.0], pixel_rays.direction(jx, jy).into());
                 let Some(prim) = s.predict_camera_prim(&ray(0.5, 0.5), &mut c) else {
                     continue;
                 };
+                let tri = accel.mesh().triangle(prim).map(Vec3::from);
                 for j in 0..8 {
                     let r = ray((j as f32 + 0.5) / 8.0, (j as f32 * 0.37 + 0.1).fract());
-                    let tri = accel.mesh().triangle(prim).map(Vec3::from);
+                    if !s.descends_steeply(Vec3::from(r.dir)) {
+                        continue;
+                    }
                     let Some(p) = hit_on_triangle(&r, tri, prim) else {
                         continue;
                     };

@@ -317,13 +317,18 @@ pub fn render_image_samples(
                         (rot.f64(), rot.f64())
                     });
                     // The triangle the pixel's centre ray hits, which its camera rays take
-                    // without the BVH where they can (see `SceneRef::predict_camera_prim`).
+                    // without the BVH where they can (see `SceneRef::predict_camera_prim`);
+                    // not traced for a pass that has no sample of this render's spp.
                     let pixel_rays = camera.pixel_rays(x, y);
                     let centre = pixel_rays.direction(0.5, 0.5);
-                    let predicted =
-                        scene.predict_camera_prim(&Ray::new(origin, centre.to_array()), &mut c);
+                    let predicted = if (samples.pass as u32) < spp {
+                        scene.predict_camera_prim(&Ray::new(origin, centre.to_array()), &mut c)
+                    } else {
+                        None
+                    };
                     // The pixel's samples go to the integrator CAMERA_BATCH at a time, so that
-                    // their camera rays are traced together (one Embree packet).
+                    // the camera rays the BVH must trace are traced together (one Embree
+                    // packet).
                     let mut sample_ids = (samples.pass as u32..spp).step_by(samples.passes);
                     loop {
                         let mut ids = [0u32; CAMERA_BATCH];

@@ -72,7 +72,8 @@ impl TraceSettings {
 /// Per-render counts, summed over threads.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct Counters {
-    /// Rays handed to the tracer.
+    /// Rays whose closest hit was searched for: by the BVH, or for `predicted` of them on
+    /// their pixel's predicted triangle.
     pub rays: u64,
     /// Ocean hits shaded.
     pub hits: u64,
@@ -107,7 +108,9 @@ pub struct Counters {
     /// written before it.
     #[serde(default)]
     pub predicted: u64,
-    /// Rays traced through the pixels' centres to predict those triangles (not in `rays`).
+    /// Rays traced through the pixels' centres to predict those triangles (not in `rays`;
+    /// every pass traces its pixels' again, so merged passes sum them). Absent from pass files
+    /// written before it.
     #[serde(default)]
     pub prediction_rays: u64,
     /// Mapped-normal evaluations; of every 64, one is timed alone (`normal_timed`, with
@@ -284,7 +287,8 @@ pub fn hit_on_triangle(ray: &Ray, tri: [Vec3; 3], prim: u32) -> Option<Hit> {
     (inside && t >= ray.tnear && t <= ray.tfar && t.is_finite()).then_some(Hit { t, prim, u, v })
 }
 
-/// Most camera rays [`SceneRef::radiance_camera_batch`] takes at once: one Embree packet. It
+/// Most camera rays [`SceneRef::radiance_camera_batch`] takes at once: one Embree packet for
+/// those the BVH must trace. It
 /// bounds every batch of [`SceneRef::radiance_batch`] (a batch holds a sample at most once).
 pub const CAMERA_BATCH: usize = 16;
 /// Fewer rays than this are traced one by one: a packet of 16 lanes carrying one camera ray was
@@ -298,15 +302,16 @@ pub struct SceneRef<'a> {
     pub accel: &'a dyn Accel,
     /// From [`max_slope`]: rays in the water descending more steeply than this are not
     /// traced (they cannot hit the surface) and return the upwelling radiance directly; nor are
-    /// rays leaving a hit into the air rising more steeply, which see the sky directly. `None`
-    /// traces every ray.
+    /// rays leaving a hit into the air rising more steeply, which see the sky directly; and
+    /// camera rays descending more steeply may take a predicted hit (`predict_camera_hits`).
+    /// `None` traces every ray.
     pub skip_slope: Option<f32>,
     /// From [`highest_vertex_y`]: rays in the air leaving upwards from above this height are
     /// not traced (nothing lies above it) and see the sky directly. `None` traces every ray.
     pub skip_above_y: Option<f32>,
-    /// Camera rays take their hit from their pixel's predicted triangle where that is exact
-    /// ([`SceneRef::predict_camera_prim`]; needs `skip_slope`). The hits differ from the BVH's
-    /// only by rounding.
+    /// Camera rays take their hit from their pixel's predicted triangle where that triangle
+    /// holds their closest hit ([`SceneRef::predict_camera_prim`]; needs `skip_slope`). The
+    /// hits differ from the BVH's by rounding.
     pub predict_camera_hits: bool,
     /// The ocean, for mapped normals (required for `NormalMode::Mapped`).
     pub ocean: Option<Sampler<'a>>,
@@ -543,17 +548,18 @@ impl SceneRef<'_> {
     /// Whether a ray descends more steeply than any slope of the mesh ([`max_slope`]): along
     /// it the height above the surface only falls, so it crosses the surface at most once.
     #[inline]
-    fn descends_steeply(&self, d: Vec3) -> bool {
+    pub fn descends_steeply(&self, d: Vec3) -> bool {
         self.skip_slope
             .is_some_and(|slope| d.y < 0.0 && -d.y > slope * (d.x * d.x + d.z * d.z).sqrt())
     }
 
     /// The triangle a pixel's camera rays are predicted to hit: the one its centre ray `ray`
     /// hits, when that ray descends more steeply than the mesh ever slopes (`None` otherwise,
-    /// for a miss, and when `predict_camera_hits` is off). Such a ray crosses the surface at most once, so for a camera ray that
-    /// descends as steeply, a hit on this triangle is its closest hit: the BVH need not be
-    /// searched ([`Self::radiance_camera_batch`]). The centre ray depends on the pixel alone,
-    /// so a sample's hit does not depend on which other samples a render or a pass takes.
+    /// for a miss, and when `predict_camera_hits` is off). A camera ray that descends as
+    /// steeply crosses the surface at most once, so a hit on this triangle is its closest hit
+    /// (up to rounding): the BVH need not be searched ([`Self::radiance_camera_batch`]). The
+    /// centre ray depends on the pixel alone, so a sample's hit does not depend on which other
+    /// samples a render or a pass takes.
     pub fn predict_camera_prim(&self, ray: &Ray, c: &mut Counters) -> Option<u32> {
         if !self.predict_camera_hits
             || !self.descends_steeply(Vec3::from(ray.dir))
@@ -569,8 +575,9 @@ impl SceneRef<'_> {
     /// [`Self::radiance_batch`]. At most [`CAMERA_BATCH`] rays; `rngs[i]` is ray i's generator
     /// and `out[i]` receives its radiance. `predicted`: the pixel's triangle from
     /// [`Self::predict_camera_prim`]; a ray that descends more steeply than the mesh slopes and
-    /// meets it takes that hit ([`hit_on_triangle`]) instead of the BVH's. Each ray's result is bit for bit what it gets in a batch of one with the same
-    /// prediction (and [`Self::radiance`]'s without one, up to the rounding of its hit).
+    /// meets it takes that hit ([`hit_on_triangle`]) instead of the BVH's. Each ray's result is
+    /// bit for bit what it gets in a batch of one with the same prediction; with `None`, what
+    /// [`Self::radiance`] gives it (with a prediction, that up to the rounding of the hit).
     pub fn radiance_camera_batch(
         &self,
         rays: &[Ray],

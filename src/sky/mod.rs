@@ -161,8 +161,8 @@ fn clear_lane(d: [f32; 3], sun: [f32; 3], sun_radiance: f32, sky_scale: f32) -> 
 
 /// acos(x) for x in [-1, 1], within 3e-7 rad of the true angle (an f32 ulp is 2.4e-7 near
 /// pi), branch-free for [`clear_lane`]: Cephes' `acosf` (S. L. Moshier), pi/2 - asin(x) in the
-/// middle and +-2 asin(sqrt((1 -+ x) / 2)) towards +-1, asin an odd polynomial of degree 9 on
-/// [0, 1/2].
+/// middle, 2 asin(sqrt((1 - x) / 2)) towards 1 and pi minus that of -x towards -1, asin an odd
+/// polynomial of degree 11 on [0, 1/2].
 #[inline(always)]
 fn acos(x: f32) -> f32 {
     let a = x.abs();
@@ -331,8 +331,8 @@ impl Sky {
         }
     }
 
-    /// Towards where the ray meets the sky, seen from the camera (see [`Self::direction`]),
-    /// normalised.
+    /// Towards where the ray meets the sky, seen from the camera (see [`Self::direction`]):
+    /// the dome's offset normalised, or the ray's own direction (unit already).
     #[inline]
     fn unit_direction(&self, org: Vec3, dir: Vec3) -> Vec3 {
         match self.dome_altitude_m {
@@ -484,7 +484,8 @@ struct Taps {
 /// The taps of a `w` x `h` map along `d`: one lane of a batch ([`Sky::radiance_many`] runs it
 /// over many directions in a loop the compiler vectorises; [`lookup`] runs it alone, so a
 /// direction reads the same texels with the same weights either way). The floors are written
-/// as truncations, which vectorise without SSE4.1 (a lane of NaN reads texel 0, weighted NaN).
+/// as truncations, which vectorise without SSE4.1 (a lane of NaN reads columns 0 and 1 of row
+/// 0, weighted NaN).
 #[inline(always)]
 fn taps(d: [f32; 3], w: usize, h: usize) -> Taps {
     let (wf, hf) = (w as f32, h as f32);
