@@ -143,6 +143,47 @@ fn gauss_pair(rng: &mut ChaCha8Rng) -> (f64, f64) {
     (r * c, r * s)
 }
 
+/// Grid coordinates of smaller magnitude split in `i32` lanes; a point beyond (2^30 texels out,
+/// 25 000 km for the finest default layer) takes the scalar [`split`].
+const LANE_RANGE: f64 = (1u32 << 30) as f64;
+
+/// [`split`] for lanes of grid coordinates within `LANE_RANGE`, in vector code. Adding
+/// 1.5 x 2^52 rounds a coordinate to the nearest integer, whose two's complement is then the
+/// low 32 bits of the sum (exact below 2^51); one less where that rounded up is the floor.
+/// (A float-to-int cast would be scalar code: Rust's `as` saturates.)
+#[inline]
+fn split_lanes<const LANES: usize>(p: &[f64; LANES]) -> ([i32; LANES], [f32; LANES]) {
+    const ROUND: f64 = 6_755_399_441_055_744.0; // 1.5 x 2^52
+    let mut i = [0i32; LANES];
+    let mut f = [0.0f32; LANES];
+    for l in 0..LANES {
+        let shifted = p[l] + ROUND;
+        let nearest = shifted - ROUND;
+        let up = nearest > p[l];
+        let floor = if up { nearest - 1.0 } else { nearest };
+        i[l] = (shifted.to_bits() as i32).wrapping_sub(i32::from(up));
+        f[l] = (p[l] - floor) as f32;
+    }
+    (i, f)
+}
+
+/// The weights of texels (ix, iz), (ix+1, iz), (ix, iz+1), (ix+1, iz+1) at fractions (fx, fz).
+#[inline]
+fn bilinear_weights(fx: f32, fz: f32) -> [f32; 4] {
+    let (gx, gz) = (1.0 - fx, 1.0 - fz);
+    [gx * gz, fx * gz, gx * fz, fx * fz]
+}
+
+/// The weighted sum of four texels, field by field.
+#[inline]
+fn blend(t: [&Texel; 4], w: [f32; 4]) -> Texel {
+    let mut r = [0.0f32; FIELD_COUNT];
+    for j in 0..FIELD_COUNT {
+        r[j] = w[0] * t[0][j] + w[1] * t[1][j] + w[2] * t[2][j] + w[3] * t[3][j];
+    }
+    r
+}
+
 #[inline]
 fn split(p: f64) -> (i64, f32) {
     // truncation plus correction: floor() is a libm call on baseline x86-64
@@ -479,13 +520,66 @@ impl Layer {
         let (iz, fz) = split(pz);
         let (t00, t10) = (self.texel(ix, iz), self.texel(ix + 1, iz));
         let (t01, t11) = (self.texel(ix, iz + 1), self.texel(ix + 1, iz + 1));
-        let (gx, gz) = (1.0 - fx, 1.0 - fz);
-        let w = [gx * gz, fx * gz, gx * fz, fx * fz];
-        let mut r = [0.0f32; FIELD_COUNT];
-        for j in 0..FIELD_COUNT {
-            r[j] = w[0] * t00[j] + w[1] * t10[j] + w[2] * t01[j] + w[3] * t11[j];
+        blend([t00, t10, t01, t11], bilinear_weights(fx, fz))
+    }
+
+    /// Adds the bilinear reads at the grid coordinates `(px[l], pz[l])` of the first `count`
+    /// lanes into `sum[l]`, bit for bit `sum[l] += self.bilinear(px[l], pz[l])`. The lanes'
+    /// cells and weights are computed together (vector code, where `bilinear` spends most of
+    /// its instructions one point at a time); each lane then reads its four texels. Lanes past
+    /// `count` are computed and not read, whatever they hold.
+    #[inline]
+    pub fn add_bilinear_lanes<const LANES: usize>(
+        &self,
+        px: &[f64; LANES],
+        pz: &[f64; LANES],
+        count: usize,
+        sum: &mut [Texel; LANES],
+    ) {
+        // All lanes, without a branch (one past `count` out of range costs time, not bits).
+        let in_range = px.iter().zip(pz).fold(true, |ok, (x, z)| {
+            ok & (x.abs() < LANE_RANGE) & (z.abs() < LANE_RANGE)
+        });
+        if !in_range {
+            // Far out (or NaN): the scalar read, whose split takes any coordinate.
+            for l in 0..count {
+                let t = self.bilinear(px[l], pz[l]);
+                for (s, t) in sum[l].iter_mut().zip(t) {
+                    *s += t;
+                }
+            }
+            return;
         }
-        r
+        let (ix, fx) = split_lanes(px);
+        let (iz, fz) = split_lanes(pz);
+        let m = (self.n - 1) as i32;
+        let shift = self.n.trailing_zeros();
+        // Per corner, per lane (the layout vector code wants).
+        let mut cells = [[0u32; LANES]; 4];
+        let mut weights = [[0.0f32; LANES]; 4];
+        for l in 0..LANES {
+            let (x0, x1) = (ix[l] & m, (ix[l] + 1) & m);
+            let (z0, z1) = ((iz[l] & m) << shift, ((iz[l] + 1) & m) << shift);
+            for (c, i) in [z0 | x0, z0 | x1, z1 | x0, z1 | x1].into_iter().enumerate() {
+                cells[c][l] = i as u32;
+            }
+            for (c, w) in bilinear_weights(fx[l], fz[l]).into_iter().enumerate() {
+                weights[c][l] = w;
+            }
+        }
+        // Masking a cell (below n^2, a power of two) changes nothing but spares the bounds
+        // check: the compiler knows i & (len - 1) < len.
+        let f = &self.fields[..];
+        let mask = f.len() - 1;
+        for (l, s) in sum.iter_mut().enumerate().take(count) {
+            let t = blend(
+                std::array::from_fn(|c| &f[cells[c][l] as usize & mask]),
+                std::array::from_fn(|c| weights[c][l]),
+            );
+            for (s, t) in s.iter_mut().zip(t) {
+                *s += t;
+            }
+        }
     }
 
     /// Catmull-Rom bicubic read at grid coordinates (px, pz) (wraps).

@@ -124,6 +124,53 @@ impl Sampler<'_> {
         normal_from_slopes(slopes(&self.fields(u, v))).0
     }
 
+    /// The unit normals at the points `uv` into `out`, each bit for bit `self.normal(u, v)`:
+    /// up to eight points at a time, whose cells and weights are computed together and whose
+    /// normals are independent (what normal mapping needs for a batch of hits).
+    pub fn normals(&self, uv: &[[f32; 2]], out: &mut [[f32; 3]]) {
+        assert_eq!(uv.len(), out.len(), "one normal per point");
+        if self.interp != Interp::Bilinear {
+            for (n, &[u, v]) in out.iter_mut().zip(uv) {
+                *n = self.normal(u, v);
+            }
+            return;
+        }
+        // Eight lanes at a time; four for a batch's last four or fewer (small batches are
+        // common: a render of few samples per pixel, the rays leaving hits).
+        let (mut uv, mut out) = (uv, out);
+        while !uv.is_empty() {
+            let k = uv.len().min(8);
+            let (now, rest) = uv.split_at(k);
+            let (into, rest_out) = std::mem::take(&mut out).split_at_mut(k);
+            if k > 4 {
+                self.normals_in_lanes::<8>(now, into);
+            } else {
+                self.normals_in_lanes::<4>(now, into);
+            }
+            (uv, out) = (rest, rest_out);
+        }
+    }
+
+    /// [`Sampler::normals`] of up to `LANES` points, bilinear.
+    #[inline]
+    fn normals_in_lanes<const LANES: usize>(&self, uv: &[[f32; 2]], out: &mut [[f32; 3]]) {
+        let count = uv.len();
+        let (mut u, mut v) = ([0.0f32; LANES], [0.0f32; LANES]);
+        for (l, p) in uv.iter().enumerate() {
+            (u[l], v[l]) = (p[0], p[1]);
+        }
+        let mut sum = [[0.0f32; FIELD_COUNT]; LANES];
+        for (layer, o) in self.layers.iter().zip(&self.origin) {
+            let inv = layer.inv_dx();
+            let px = std::array::from_fn(|l| o[0] + u[l] as f64 * inv);
+            let pz = std::array::from_fn(|l| o[1] + v[l] as f64 * inv);
+            layer.add_bilinear_lanes(&px, &pz, count, &mut sum);
+        }
+        for (n, s) in out.iter_mut().zip(&sum) {
+            *n = normal_from_slopes(slopes(s)).0;
+        }
+    }
+
     /// The eight summed fields at (u, v), in [`field`] order.
     #[inline]
     pub fn fields(&self, u: f32, v: f32) -> Texel {
