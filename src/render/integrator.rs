@@ -113,17 +113,25 @@ pub struct Counters {
     /// written before it.
     #[serde(default)]
     pub prediction_rays: u64,
-    /// Mapped-normal evaluations; of every 64, one is timed alone (`normal_timed`, with
-    /// `normal_timed_ns` in all) and one is timed followed by a second, discarded evaluation of
-    /// the same normal (`normal_timed_twice`, `normal_timed_twice_ns`; absent from pass files
-    /// written before them). See [`Counters::normal_map_thread_seconds`].
+    /// Mapped normals evaluated (`normal_evals`), in `normal_batches` calls, each a batch of
+    /// hits. Of every 64 calls, one is timed alone (`normal_timed` intervals, `normal_timed_ns`
+    /// in all, over `normal_timed_points` normals) and one is timed followed by a second,
+    /// discarded evaluation of the same normals (`normal_timed_twice`, `..._ns`, `..._points`).
+    /// See [`Counters::normal_map_thread_seconds`]. Pass files written before the batches
+    /// lack `normal_batches` and the `_points` (each of their intervals timed one normal).
     pub normal_evals: u64,
+    #[serde(default)]
+    pub normal_batches: u64,
     pub normal_timed: u64,
     pub normal_timed_ns: u64,
+    #[serde(default)]
+    pub normal_timed_points: u64,
     #[serde(default)]
     pub normal_timed_twice: u64,
     #[serde(default)]
     pub normal_timed_twice_ns: u64,
+    #[serde(default)]
+    pub normal_timed_twice_points: u64,
 }
 
 impl std::ops::AddAssign for Counters {
@@ -144,38 +152,59 @@ impl std::ops::AddAssign for Counters {
         self.predicted += o.predicted;
         self.prediction_rays += o.prediction_rays;
         self.normal_evals += o.normal_evals;
+        self.normal_batches += o.normal_batches;
         self.normal_timed += o.normal_timed;
         self.normal_timed_ns += o.normal_timed_ns;
+        self.normal_timed_points += o.normal_timed_points;
         self.normal_timed_twice += o.normal_timed_twice;
         self.normal_timed_twice_ns += o.normal_timed_twice_ns;
+        self.normal_timed_twice_points += o.normal_timed_twice_points;
     }
 }
 
 impl Counters {
-    /// Estimated thread-seconds that mapped normals add to the trace: the number of
-    /// evaluations times what a second evaluation adds to a timed interval (the mean interval
-    /// with two evaluations less the mean with one).
+    /// Estimated thread-seconds that mapped normals add to the trace: the number of normals
+    /// times what one more normal adds to a timed interval. Each interval is modelled as
+    /// `clock + k x normals` (k doubled where the batch is evaluated twice); the sums of the
+    /// two kinds of intervals give the two unknowns, and k is the cost of a normal.
     ///
     /// An interval with one evaluation overstates its cost: reading the clock waits for the work
     /// in flight before it to finish, so the interval also holds the overlap with neighbouring
-    /// work that an untimed evaluation enjoys. The difference of the two means cancels that and
-    /// the clock's own cost; it agrees with rendering with every normal evaluated twice (0.49 s
-    /// more trace on the default scene, where one evaluation per interval read 0.85-0.91 s).
-    /// The second evaluation finds the texels in cache, so a normal whose reads miss is
-    /// undercounted (reading the whole default ocean from one 32 x 32 block of texels took only
-    /// 4 % off the single-interval time). Renders too small to have timed a pair fall back to
-    /// the single intervals less [`clock_overhead_ns`].
+    /// work that an untimed evaluation enjoys. The second evaluation cancels that and the
+    /// clock's own cost; one normal at a time, the estimate agreed with rendering with every
+    /// normal evaluated twice (0.49 s more trace on the default scene, where one evaluation per
+    /// interval read 0.85-0.91 s). The second evaluation finds the texels in cache, so normals
+    /// whose reads miss are undercounted (reading the whole default ocean from one 32 x 32
+    /// block of texels took only 4 % off the single-interval time). Renders too small to have
+    /// timed a pair fall back to the single intervals less [`clock_overhead_ns`].
     pub fn normal_map_thread_seconds(&self) -> f64 {
-        let mean = |ns: u64, n: u64| ns as f64 / n as f64;
-        let per_eval_ns = if self.normal_timed > 0 && self.normal_timed_twice > 0 {
-            mean(self.normal_timed_twice_ns, self.normal_timed_twice)
-                - mean(self.normal_timed_ns, self.normal_timed)
-        } else if self.normal_timed > 0 {
-            mean(self.normal_timed_ns, self.normal_timed) - clock_overhead_ns()
+        // Pass files from before the batches: one normal per interval.
+        let points = |p: u64, intervals: u64| if p == 0 { intervals } else { p } as f64;
+        let (n1, s1) = (
+            self.normal_timed as f64,
+            points(self.normal_timed_points, self.normal_timed),
+        );
+        let (n2, s2) = (
+            self.normal_timed_twice as f64,
+            points(self.normal_timed_twice_points, self.normal_timed_twice),
+        );
+        let (t1, t2) = (
+            self.normal_timed_ns as f64,
+            self.normal_timed_twice_ns as f64,
+        );
+        let per_normal_ns = if n1 > 0.0 && n2 > 0.0 {
+            // t1 = clock n1 + k s1, t2 = clock n2 + 2 k s2
+            (t2 * n1 - t1 * n2) / (2.0 * s2 * n1 - s1 * n2)
+        } else if n1 > 0.0 {
+            (t1 - clock_overhead_ns() * n1) / s1
         } else {
             return 0.0;
         };
-        per_eval_ns.max(0.0) * 1e-9 * self.normal_evals as f64
+        if per_normal_ns.is_finite() {
+            per_normal_ns.max(0.0) * 1e-9 * self.normal_evals as f64
+        } else {
+            0.0
+        }
     }
 }
 
@@ -207,17 +236,78 @@ pub fn tilt_to_earth(u: f32, v: f32, earth_radius_m: f64, n: Vec3) -> Vec3 {
         return n;
     }
     let theta = (r as f64 / earth_radius_m) as f32;
-    // Out to the horizon theta < 1e-3 rad, where two Taylor terms are exact in f32 and much
-    // cheaper than sin_cos (this runs at every mapped hit).
-    let (s, c) = if theta < 1e-2 {
-        let t2 = theta * theta;
-        (theta * (1.0 - t2 / 6.0), 1.0 - 0.5 * t2 * (1.0 - t2 / 12.0))
+    let (s, c) = if theta < TILT_SERIES_MAX {
+        tilt_series(theta)
     } else {
         theta.sin_cos()
     };
-    // Rotation about the horizontal axis a = (v, 0, -u) / r (Rodrigues' formula).
-    let a = Vec3::new(v / r, 0.0, -u / r);
-    n * c + a.cross(n) * s + a * a.dot(n) * (1.0 - c)
+    Vec3::from(rotate_tilt(u, v, r, s, c, n.to_array()))
+}
+
+/// Out to the horizon theta < 1e-3 rad, where two Taylor terms are exact in f32 and much
+/// cheaper than sin_cos (this runs at every mapped hit); they take angles below this.
+const TILT_SERIES_MAX: f32 = 1e-2;
+
+/// (sin theta, cos theta) for theta < [`TILT_SERIES_MAX`].
+#[inline]
+fn tilt_series(theta: f32) -> (f32, f32) {
+    let t2 = theta * theta;
+    (theta * (1.0 - t2 / 6.0), 1.0 - 0.5 * t2 * (1.0 - t2 / 12.0))
+}
+
+/// Rotation of `n` by the angle with sine `s` and cosine `c` about the horizontal axis
+/// a = (v, 0, -u) / r (Rodrigues' formula): n c + (a x n) s + a (a . n) (1 - c), written out
+/// in glam's order of operations (the renders stayed bit for bit the same) so that lanes of it
+/// compile to vector code.
+#[inline]
+fn rotate_tilt(u: f32, v: f32, r: f32, s: f32, c: f32, n: [f32; 3]) -> [f32; 3] {
+    let (ax, ay, az) = (v / r, 0.0f32, -u / r);
+    let [nx, ny, nz] = n;
+    let cross = [ay * nz - ny * az, az * nx - nz * ax, ax * ny - nx * ay];
+    let dot = ax * nx + ay * ny + az * nz;
+    let k = 1.0 - c;
+    [
+        nx * c + cross[0] * s + ax * dot * k,
+        ny * c + cross[1] * s + ay * dot * k,
+        nz * c + cross[2] * s + az * dot * k,
+    ]
+}
+
+/// [`tilt_to_earth`] of every `n[i]` at `uv[i]`, bit for bit: points out to the series' reach
+/// are rotated together, branch-free, in vector code; the rest (the nadir, a flat earth,
+/// beyond the series) one at a time.
+pub fn tilt_to_earth_many(uv: &[[f32; 2]], earth_radius_m: f64, n: &mut [Vec3]) {
+    const LANES: usize = 8;
+    assert_eq!(uv.len(), n.len(), "one position per vector");
+    let finite = earth_radius_m.is_finite();
+    for (uv, n) in uv.chunks(LANES).zip(n.chunks_mut(LANES)) {
+        // Lanes past the chunk rotate +y at the origin, and are not written back. Components
+        // are kept apart (one array per coordinate): the layout vector code wants.
+        let (mut u, mut v) = ([0.0f32; LANES], [0.0f32; LANES]);
+        let mut flat = [[0.0f32; LANES], [1.0; LANES], [0.0; LANES]];
+        for (l, (p, n)) in uv.iter().zip(&*n).enumerate() {
+            (u[l], v[l]) = (p[0], p[1]);
+            (flat[0][l], flat[1][l], flat[2][l]) = (n.x, n.y, n.z);
+        }
+        let mut series = [false; LANES];
+        let mut tilted = [[0.0f32; LANES]; 3];
+        for l in 0..LANES {
+            let r = (u[l] * u[l] + v[l] * v[l]).sqrt();
+            let theta = (r as f64 / earth_radius_m) as f32;
+            // (A NaN radius fails the `theta <` test: the scalar path returns its rotation.)
+            series[l] = r != 0.0 && theta < TILT_SERIES_MAX;
+            let (s, c) = tilt_series(theta);
+            let t = rotate_tilt(u[l], v[l], r, s, c, [flat[0][l], flat[1][l], flat[2][l]]);
+            (tilted[0][l], tilted[1][l], tilted[2][l]) = (t[0], t[1], t[2]);
+        }
+        for (l, n) in n.iter_mut().enumerate() {
+            *n = if series[l] && finite {
+                Vec3::new(tilted[0][l], tilted[1][l], tilted[2][l])
+            } else {
+                tilt_to_earth(u[l], v[l], earth_radius_m, *n)
+            };
+        }
+    }
 }
 
 /// The steepest slope (height change per horizontal metre) of any triangle of a mesh that is a
@@ -466,51 +556,88 @@ impl SceneRef<'_> {
             normals: mode,
             ..TraceSettings::default()
         };
-        self.shading_normal(hit, &settings, &mut Counters::default())
+        let mut n = [Vec3::Y];
+        self.shading_normals(&[Some(*hit)], &settings, &mut Counters::default(), &mut n);
+        n[0]
     }
 
-    /// The ocean's normal at a hit's texture coordinate, tilted to the curved earth.
-    #[inline]
-    fn mapped_normal(&self, ocean: &Sampler, hit: &Hit) -> Vec3 {
-        let uv = self.accel.interpolate_uv(hit);
-        let n = Vec3::from(ocean.normal(uv[0], uv[1]));
-        tilt_to_earth(uv[0], uv[1], self.earth_radius_m, n)
-    }
-
-    fn shading_normal(&self, hit: &Hit, settings: &TraceSettings, c: &mut Counters) -> Vec3 {
+    /// The shading normals (air side up) at a batch of hits into `out` (a miss gets +y).
+    /// Mapped normals: each hit's texture coordinate, the ocean's normals there computed
+    /// together ([`Sampler::normals`], bit for bit one at a time), tilted to the curved earth.
+    /// One call in 64 is timed alone, one timed with a second evaluation of the same normals
+    /// (see [`Counters::normal_map_thread_seconds`]).
+    fn shading_normals(
+        &self,
+        hits: &[Option<Hit>],
+        settings: &TraceSettings,
+        c: &mut Counters,
+        out: &mut [Vec3],
+    ) {
+        debug_assert!(hits.len() <= CAMERA_BATCH && out.len() == hits.len());
         let mesh = self.accel.mesh();
         match (settings.normals, &self.ocean) {
             (NormalMode::Mapped, Some(ocean)) => {
-                // One evaluation in 64 timed alone, one timed with a second (see
-                // `Counters::normal_map_thread_seconds`). Neither is a row's first evaluation
-                // (counters start afresh with every row), whose cold caches would bias the
-                // single intervals up and the estimate down.
-                let slot = c.normal_evals % 64;
-                let t0 = (slot == 31 || slot == 63).then(std::time::Instant::now);
-                let n = self.mapped_normal(ocean, hit);
-                if slot == 63 {
-                    std::hint::black_box(self.mapped_normal(ocean, std::hint::black_box(hit)));
+                let mut uv = [[0.0f32; 2]; CAMERA_BATCH];
+                let mut at = [0u8; CAMERA_BATCH];
+                let mut n = 0;
+                for (i, h) in hits.iter().enumerate() {
+                    if let Some(h) = h {
+                        (uv[n], at[n]) = (self.accel.interpolate_uv(h), i as u8);
+                        n += 1;
+                    }
                 }
-                c.normal_evals += 1;
+                if n == 0 {
+                    return;
+                }
+                let mapped = |normals: &mut [Vec3]| {
+                    let mut flat = [[0.0f32; 3]; CAMERA_BATCH];
+                    ocean.normals(&uv[..n], &mut flat[..n]);
+                    for (o, f) in normals.iter_mut().zip(&flat) {
+                        *o = Vec3::from(*f);
+                    }
+                    tilt_to_earth_many(&uv[..n], self.earth_radius_m, normals);
+                };
+                // Neither timed call is a row's first (counters start afresh with every row),
+                // whose cold caches would bias the single intervals up and the estimate down.
+                let slot = c.normal_batches % 64;
+                let t0 = (slot == 31 || slot == 63).then(std::time::Instant::now);
+                let mut normals = [Vec3::Y; CAMERA_BATCH];
+                mapped(&mut normals[..n]);
+                if slot == 63 {
+                    let mut again = [Vec3::Y; CAMERA_BATCH];
+                    std::hint::black_box(&uv);
+                    mapped(&mut again[..n]);
+                    std::hint::black_box(&again);
+                }
                 if let Some(t0) = t0 {
                     let ns = t0.elapsed().as_nanos() as u64;
                     if slot == 31 {
                         c.normal_timed += 1;
                         c.normal_timed_ns += ns;
+                        c.normal_timed_points += n as u64;
                     } else {
                         c.normal_timed_twice += 1;
                         c.normal_timed_twice_ns += ns;
+                        c.normal_timed_twice_points += n as u64;
                     }
                 }
-                n
+                c.normal_batches += 1;
+                c.normal_evals += n as u64;
+                for (&i, nm) in at[..n].iter().zip(normals) {
+                    out[i as usize] = nm;
+                }
             }
             _ => {
-                if mesh.normals().is_empty() {
-                    return Vec3::Y;
+                for (o, h) in out.iter_mut().zip(hits) {
+                    *o = match h {
+                        Some(h) if !mesh.normals().is_empty() => {
+                            let tri = mesh.indices()[h.prim as usize];
+                            Vec3::from(Mesh::interpolate(mesh.normals(), tri, h.u, h.v))
+                                .normalize_or(Vec3::Y)
+                        }
+                        _ => Vec3::Y,
+                    };
                 }
-                let tri = mesh.indices()[hit.prim as usize];
-                Vec3::from(Mesh::interpolate(mesh.normals(), tri, hit.u, hit.v))
-                    .normalize_or(Vec3::Y)
             }
         }
     }
@@ -696,10 +823,12 @@ impl SceneRef<'_> {
             }
         }
 
-        // Shading at every hit; what a miss sees.
+        // Shading at every hit, its normal computed with the others'; what a miss sees.
+        let mut normals = [Vec3::Y; CAMERA_BATCH];
+        self.shading_normals(&hits[..m], settings, c, &mut normals[..m]);
         let mut shaded = [(0u8, Scatter::NONE); CAMERA_BATCH];
         let mut n_shaded = 0;
-        for (&k, hit) in traced_entry[..m].iter().zip(&hits[..m]) {
+        for ((&k, hit), ns) in traced_entry[..m].iter().zip(&hits[..m]).zip(normals) {
             let e = &entries[k as usize];
             match hit {
                 None => out[k as usize] = self.miss(&e.ray, e.in_water, segment, settings, c),
@@ -707,7 +836,8 @@ impl SceneRef<'_> {
                     c.hits += 1;
                     // A planar triangle cannot meet a ray leaving it twice: this is rounding.
                     c.self_hits += u64::from(e.parent == Some(hit.prim));
-                    shaded[n_shaded] = (k, self.scatter(Vec3::from(e.ray.dir), hit, settings, c));
+                    let d = Vec3::from(e.ray.dir);
+                    shaded[n_shaded] = (k, self.scatter(d, hit, ns, settings, c));
                     n_shaded += 1;
                 }
             }
@@ -847,9 +977,17 @@ impl SceneRef<'_> {
         }
     }
 
-    /// Shading at a hit of a ray travelling along `d`: the interface's normals, the Fresnel
-    /// weight and the reflected and refracted directions.
-    fn scatter(&self, d: Vec3, hit: &Hit, settings: &TraceSettings, c: &mut Counters) -> Scatter {
+    /// Shading at a hit of a ray travelling along `d`, whose shading normal (air side up) is
+    /// `shading` ([`Self::shading_normals`]): the interface's normals, the Fresnel weight and
+    /// the reflected and refracted directions.
+    fn scatter(
+        &self,
+        d: Vec3,
+        hit: &Hit,
+        shading: Vec3,
+        settings: &TraceSettings,
+        c: &mut Counters,
+    ) -> Scatter {
         let sp = surface_point(self.accel.mesh(), hit);
         let from_below = d.dot(sp.ng) > 0.0;
         let attenuation = if from_below {
@@ -859,7 +997,7 @@ impl SceneRef<'_> {
         };
 
         // Shading normal facing the incoming ray, and the geometric one likewise.
-        let mut ns = self.shading_normal(hit, settings, c);
+        let mut ns = shading;
         let (ng, eta_i, eta_t) = if from_below {
             (-sp.ng, settings.water.ior, 1.0)
         } else {
@@ -1002,6 +1140,19 @@ mod tests {
         let expected = (120.0 - clock_overhead_ns()).max(0.0) * 1e-9 * 6400.0;
         assert!((single.normal_map_thread_seconds() - expected).abs() < 1e-12);
         assert_eq!(Counters::default().normal_map_thread_seconds(), 0.0);
+        // Batches of different sizes: a 30 ns clock and 20 ns a normal, 10 normals an interval
+        // alone and 14 in a pair's; the estimate recovers the 20 ns.
+        let batches = Counters {
+            normal_evals: 6400,
+            normal_timed: 100,
+            normal_timed_points: 1000,
+            normal_timed_ns: 100 * 30 + 20 * 1000,
+            normal_timed_twice: 50,
+            normal_timed_twice_points: 700,
+            normal_timed_twice_ns: 50 * 30 + 2 * 20 * 700,
+            ..Counters::default()
+        };
+        assert!((batches.normal_map_thread_seconds() - 6400.0 * 20e-9).abs() < 1e-12);
     }
 
     #[test]
@@ -1013,6 +1164,37 @@ mod tests {
         assert_eq!(tilt_to_earth(0.0, 0.0, r, Vec3::Y), Vec3::Y);
         let n = tilt_to_earth(0.0, -3000.0, r, Vec3::Y);
         assert!(n.z < 0.0 && n.x.abs() < 1e-9);
+    }
+
+    #[test]
+    fn earth_tilt_in_lanes_is_the_tilt_one_at_a_time() {
+        let mut uv = Vec::new();
+        let mut n = Vec::new();
+        for i in 0..37u64 {
+            let h = crate::rng::splitmix64(i);
+            let f = |k: u32| ((h >> k) & 0xFFFF) as f32 / 65536.0 - 0.5;
+            // out to 150 km: past the series' reach (63.7 km on the earth; 10 m on a planet
+            // of 1 km, where the series would be wrong at the 300 m scale)
+            let scale = [3.0e5, 600.0, 30.0][i as usize % 3];
+            uv.push([f(0) * scale, f(16) * scale]);
+            n.push(Vec3::new(f(32), 1.0, f(48)).normalize());
+        }
+        uv.extend([
+            [0.0, 0.0],
+            [1.0e-30, 0.0],
+            [f32::NAN, 2.0],
+            [f32::INFINITY, 0.0],
+        ]);
+        n.extend([Vec3::Y, Vec3::X, Vec3::Y, Vec3::Z]);
+        for r in [6_371_000.0, 1000.0, f64::INFINITY] {
+            let mut lanes = n.clone();
+            tilt_to_earth_many(&uv, r, &mut lanes);
+            for ((&[u, v], &n), t) in uv.iter().zip(&n).zip(lanes) {
+                let one = tilt_to_earth(u, v, r, n);
+                let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                assert_eq!(bits(t), bits(one), "R {r} at ({u}, {v})");
+            }
+        }
     }
 
     #[test]
