@@ -171,12 +171,14 @@ impl Counters {
     /// An interval with one evaluation overstates its cost: reading the clock waits for the work
     /// in flight before it to finish, so the interval also holds the overlap with neighbouring
     /// work that an untimed evaluation enjoys. The second evaluation cancels that and the
-    /// clock's own cost; one normal at a time, the estimate agreed with rendering with every
-    /// normal evaluated twice (0.49 s more trace on the default scene, where one evaluation per
-    /// interval read 0.85-0.91 s). The second evaluation finds the texels in cache, so normals
-    /// whose reads miss are undercounted (reading the whole default ocean from one 32 x 32
-    /// block of texels took only 4 % off the single-interval time). Renders too small to have
-    /// timed a pair fall back to the single intervals less [`clock_overhead_ns`].
+    /// clock's own cost. Checked against rendering the default scene with every batch's normals
+    /// evaluated twice: 0.10-0.32 s more trace (four interleaved pairs) where this reads
+    /// 0.26 s. The intercept, about 200 ns an interval against the clock's 24, is left out: the
+    /// second evaluation finds the texels in cache and the pipeline busy, so what a batch costs
+    /// beyond its normals' marginal cost is not separable from the clock's (perf, which
+    /// attributes stalls to the instructions waiting, gives the normal path 14.5 % of the
+    /// trace's samples where this reads 9 %). Renders too small to have timed a pair fall back
+    /// to the single intervals less [`clock_overhead_ns`].
     pub fn normal_map_thread_seconds(&self) -> f64 {
         // Pass files from before the batches: one normal per interval.
         let points = |p: u64, intervals: u64| if p == 0 { intervals } else { p } as f64;
