@@ -536,6 +536,7 @@ impl Layer {
         count: usize,
         sum: &mut [Texel; LANES],
     ) {
+        debug_assert!(count <= LANES);
         // All lanes, without a branch (one past `count` out of range costs time, not bits).
         let in_range = px.iter().zip(pz).fold(true, |ok, (x, z)| {
             ok & (x.abs() < LANE_RANGE) & (z.abs() < LANE_RANGE)

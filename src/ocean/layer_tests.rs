@@ -4,6 +4,39 @@
 use super::*;
 use crate::ocean::{OceanParams, SpectrumKind, SpreadingKind};
 
+#[test]
+fn split_lanes_is_split() {
+    let below = |x: f64| f64::from_bits(x.to_bits() - 1);
+    let mut values = vec![0.0, -0.0, 1e-300, -1e-300, 0.5, -0.5, 2.5, -2.5, 3.0, -3.0];
+    values.extend([
+        below(1.0),
+        -below(1.0),
+        below(-3.0),
+        1e9 + 0.25,
+        -1e9 - 0.75,
+    ]);
+    values.extend([
+        LANE_RANGE - 0.5,
+        -(LANE_RANGE - 0.5),
+        below(LANE_RANGE),
+        -1234.0,
+    ]);
+    for chunk in values.chunks(8) {
+        let mut p = [0.0; 8];
+        p[..chunk.len()].copy_from_slice(chunk);
+        let (i, f) = split_lanes(&p);
+        for l in 0..8 {
+            let (si, sf) = split(p[l]);
+            assert_eq!(
+                (i[l] as i64, f[l].to_bits()),
+                (si, sf.to_bits()),
+                "at {}",
+                p[l]
+            );
+        }
+    }
+}
+
 fn spectrum(p: &OceanParams) -> Spectrum {
     Spectrum::new(p)
 }

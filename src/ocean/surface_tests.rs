@@ -30,23 +30,26 @@ fn small(seed: u64) -> Surface {
 fn normals_in_lanes_are_the_normals_one_at_a_time() {
     let s = small(5);
     let mut points = Vec::new();
-    // 8-lane chunks and a partial one: scattered points, either sign, near and far
+    // scattered points, either sign, near and far
     for i in 0..45u64 {
         let h = crate::rng::splitmix64(i);
         let (a, b) = ((h & 0xFFFF) as f32 / 65536.0, (h >> 48) as f32 / 65536.0);
         let scale = [3.0, 400.0, 60_000.0][i as usize % 3];
         points.push([(a - 0.5) * scale, (b - 0.5) * scale]);
     }
-    // on grid lines of the finest layer (whole, negative grid coordinates: the floor's edge
-    // case), beyond the lanes' i32 range next to points within it, and not a number
-    let dx = (2.93 / 64.0) as f32;
-    points.extend([[-3.0 * dx, -17.0 * dx], [0.0, 0.0], [4.0 * dx, -dx]]);
-    points.extend([[1.0e9, 2.0], [-3.0, 4.0], [5.0, -2.0e9], [f32::NAN, 1.0]]);
+    // beyond the lanes' range in x alone, in z alone (1e15 m: past 2^51 texels, where the
+    // lanes' rounding would go wrong), next to points within it; not a number (the floor's
+    // edge cases are `split_lanes_is_split` in the layer's tests)
+    let far_x = [[1.0e15, 2.0], [-3.0, 4.0], [7.5, 0.25]];
+    let far_z = [[-3.0, 4.0], [5.0, -1.0e15]];
+    let nan = [[0.5, 1.0], [f32::NAN, 1.0]];
     for interp in [Interp::Bilinear, Interp::Bicubic] {
         let sampler = s.sampler_with([1234.5, -987.25], interp);
-        for len in [points.len(), 8, 3, 0] {
-            let mut lanes = vec![[9.0f32; 3]; len];
-            sampler.normals(&points[..len], &mut lanes);
+        // 5 x 8 + 5 and 8 + 5: partial chunks of eight; 3: a chunk of four
+        let cases = [&points[..], &points[..13], &points[..8], &points[..3], &[]];
+        for points in cases.into_iter().chain([&far_x[..], &far_z[..], &nan[..]]) {
+            let mut lanes = vec![[9.0f32; 3]; points.len()];
+            sampler.normals(points, &mut lanes);
             for (p, n) in points.iter().zip(&lanes) {
                 let one = sampler.normal(p[0], p[1]);
                 assert_eq!(

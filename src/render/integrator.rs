@@ -117,8 +117,9 @@ pub struct Counters {
     /// hits. Of every 64 calls, one is timed alone (`normal_timed` intervals, `normal_timed_ns`
     /// in all, over `normal_timed_points` normals) and one is timed followed by a second,
     /// discarded evaluation of the same normals (`normal_timed_twice`, `..._ns`, `..._points`).
-    /// See [`Counters::normal_map_thread_seconds`]. Pass files written before the batches
-    /// lack `normal_batches` and the `_points` (each of their intervals timed one normal).
+    /// See [`Counters::normal_map_thread_seconds`] (applied to a render's own counters: a
+    /// merge adds up the passes' estimates). Absent from pass files written before the
+    /// batches: `normal_batches` and the `_points`.
     pub normal_evals: u64,
     #[serde(default)]
     pub normal_batches: u64,
@@ -180,33 +181,27 @@ impl Counters {
     /// trace's samples where this reads 9 %). Renders too small to have timed a pair fall back
     /// to the single intervals less [`clock_overhead_ns`].
     pub fn normal_map_thread_seconds(&self) -> f64 {
-        // Pass files from before the batches: one normal per interval.
-        let points = |p: u64, intervals: u64| if p == 0 { intervals } else { p } as f64;
-        let (n1, s1) = (
-            self.normal_timed as f64,
-            points(self.normal_timed_points, self.normal_timed),
-        );
+        let (n1, s1) = (self.normal_timed as f64, self.normal_timed_points as f64);
         let (n2, s2) = (
             self.normal_timed_twice as f64,
-            points(self.normal_timed_twice_points, self.normal_timed_twice),
+            self.normal_timed_twice_points as f64,
         );
         let (t1, t2) = (
             self.normal_timed_ns as f64,
             self.normal_timed_twice_ns as f64,
         );
-        let per_normal_ns = if n1 > 0.0 && n2 > 0.0 {
-            // t1 = clock n1 + k s1, t2 = clock n2 + 2 k s2
-            (t2 * n1 - t1 * n2) / (2.0 * s2 * n1 - s1 * n2)
-        } else if n1 > 0.0 {
+        // t1 = clock n1 + k s1 and t2 = clock n2 + 2 k s2. The denominator is n1 n2 (2 m2 - m1)
+        // for mean batch sizes m1, m2: solved only while the paired batches are not much
+        // smaller than the single ones, where noise would swamp it.
+        let denominator = 2.0 * s2 * n1 - s1 * n2;
+        let per_normal_ns = if n2 > 0.0 && denominator > 0.5 * s2 * n1 {
+            (t2 * n1 - t1 * n2) / denominator
+        } else if s1 > 0.0 {
             (t1 - clock_overhead_ns() * n1) / s1
         } else {
             return 0.0;
         };
-        if per_normal_ns.is_finite() {
-            per_normal_ns.max(0.0) * 1e-9 * self.normal_evals as f64
-        } else {
-            0.0
-        }
+        per_normal_ns.max(0.0) * 1e-9 * self.normal_evals as f64
     }
 }
 
@@ -246,8 +241,8 @@ pub fn tilt_to_earth(u: f32, v: f32, earth_radius_m: f64, n: Vec3) -> Vec3 {
     Vec3::from(rotate_tilt(u, v, r, s, c, n.to_array()))
 }
 
-/// Out to the horizon theta < 1e-3 rad, where two Taylor terms are exact in f32 and much
-/// cheaper than sin_cos (this runs at every mapped hit); they take angles below this.
+/// Angles below this take two Taylor terms, exact in f32 there and much cheaper than sin_cos
+/// (this runs at every mapped hit); out to the horizon theta stays under 1e-3 rad.
 const TILT_SERIES_MAX: f32 = 1e-2;
 
 /// (sin theta, cos theta) for theta < [`TILT_SERIES_MAX`].
@@ -563,7 +558,8 @@ impl SceneRef<'_> {
         n[0]
     }
 
-    /// The shading normals (air side up) at a batch of hits into `out` (a miss gets +y).
+    /// The shading normals (air side up) at a batch of hits into `out` (a miss's entry is
+    /// not used: left as it is, or +y).
     /// Mapped normals: each hit's texture coordinate, the ocean's normals there computed
     /// together ([`Sampler::normals`], bit for bit one at a time), tilted to the curved earth.
     /// One call in 64 is timed alone, one timed with a second evaluation of the same normals
@@ -1116,16 +1112,18 @@ mod tests {
     use super::*;
 
     #[test]
-    fn normal_cost_is_the_difference_of_paired_and_single_intervals() {
+    fn normal_cost_is_solved_from_single_and_paired_intervals() {
         let c = Counters {
             normal_evals: 6400,
             normal_timed: 100,
+            normal_timed_points: 100,
             normal_timed_ns: 12_000,
             normal_timed_twice: 100,
+            normal_timed_twice_points: 100,
             normal_timed_twice_ns: 18_000,
             ..Counters::default()
         };
-        // 180 - 120 ns per evaluation, whatever the clock costs.
+        // One normal an interval: 180 - 120 ns per evaluation, whatever the clock costs.
         assert!((c.normal_map_thread_seconds() - 6400.0 * 60e-9).abs() < 1e-12);
         // A second evaluation that seems free counts as free, not negative.
         let free = Counters {
@@ -1133,14 +1131,23 @@ mod tests {
             ..c
         };
         assert_eq!(free.normal_map_thread_seconds(), 0.0);
-        // Without pairs, the single intervals less the clock's cost.
-        let single = Counters {
-            normal_timed_twice: 0,
-            normal_timed_twice_ns: 0,
-            ..c
-        };
+        // Without pairs, or with paired batches under half the size of the single ones (too
+        // noisy to solve), the single intervals less the clock's cost.
         let expected = (120.0 - clock_overhead_ns()).max(0.0) * 1e-9 * 6400.0;
-        assert!((single.normal_map_thread_seconds() - expected).abs() < 1e-12);
+        for single in [
+            Counters {
+                normal_timed_twice: 0,
+                normal_timed_twice_ns: 0,
+                normal_timed_twice_points: 0,
+                ..c
+            },
+            Counters {
+                normal_timed_twice_points: 60,
+                ..c
+            },
+        ] {
+            assert!((single.normal_map_thread_seconds() - expected).abs() < 1e-12);
+        }
         assert_eq!(Counters::default().normal_map_thread_seconds(), 0.0);
         // Batches of different sizes: a 30 ns clock and 20 ns a normal, 10 normals an interval
         // alone and 14 in a pair's; the estimate recovers the 20 ns.

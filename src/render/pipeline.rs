@@ -158,8 +158,8 @@ pub struct RenderReport {
     pub seconds_tessellation: f64,
     pub seconds_build: f64,
     pub seconds_trace: f64,
-    /// Wall-clock seconds the mapped normals add to the trace, estimated from timed pairs of
-    /// evaluations (`Counters::normal_map_thread_seconds`; thread-seconds divided by the thread
+    /// Wall-clock seconds the mapped normals add to the trace, estimated from single and
+    /// paired timed batches (`Counters::normal_map_thread_seconds`; thread-seconds divided by the thread
     /// count).
     pub seconds_normal_map: f64,
     /// `seconds_normal_map` as a share of `seconds_trace`.
