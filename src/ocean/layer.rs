@@ -174,6 +174,14 @@ fn bilinear_weights(fx: f32, fz: f32) -> [f32; 4] {
     [gx * gz, fx * gz, gx * fz, fx * fz]
 }
 
+/// `sum += t`, field by field.
+#[inline]
+pub(crate) fn add_texel(sum: &mut Texel, t: &Texel) {
+    for (s, t) in sum.iter_mut().zip(t) {
+        *s += t;
+    }
+}
+
 /// The weighted sum of four texels, field by field.
 #[inline]
 fn blend(t: [&Texel; 4], w: [f32; 4]) -> Texel {
@@ -544,10 +552,7 @@ impl Layer {
         if !in_range {
             // Far out (or NaN): the scalar read, whose split takes any coordinate.
             for l in 0..count {
-                let t = self.bilinear(px[l], pz[l]);
-                for (s, t) in sum[l].iter_mut().zip(t) {
-                    *s += t;
-                }
+                add_texel(&mut sum[l], &self.bilinear(px[l], pz[l]));
             }
             return;
         }
@@ -577,9 +582,7 @@ impl Layer {
                 std::array::from_fn(|c| &f[cells[c][l] as usize & mask]),
                 std::array::from_fn(|c| weights[c][l]),
             );
-            for (s, t) in s.iter_mut().zip(t) {
-                *s += t;
-            }
+            add_texel(s, &t);
         }
     }
 

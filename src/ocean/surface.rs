@@ -19,7 +19,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::layer::{FIELD_COUNT, Layer, SLOPES, Slopes, Texel, field, slopes};
+use super::layer::{FIELD_COUNT, Layer, SLOPES, Slopes, Texel, add_texel, field, slopes};
 use super::spectrum::Spectrum;
 use super::{Interp, MAX_LAYERS, OceanError, OceanParams, SpectrumKind, SpreadingKind};
 
@@ -178,10 +178,7 @@ impl Sampler<'_> {
         for (layer, o) in self.layers.iter().zip(&self.origin) {
             let px = o[0] + u as f64 * layer.inv_dx();
             let pz = o[1] + v as f64 * layer.inv_dx();
-            let t = layer.read(px, pz, self.interp);
-            for j in 0..FIELD_COUNT {
-                f[j] += t[j];
-            }
+            add_texel(&mut f, &layer.read(px, pz, self.interp));
         }
         f
     }
