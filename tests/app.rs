@@ -85,7 +85,7 @@ fn tiny_compare_runs_end_to_end_and_writes_every_file() {
     scene.camera.projection = Projection::Equirect {
         band_deg: Some((1.0, -6.0)),
     };
-    scene.render.spp = 2;
+    scene.render.spp = 8;
     scene.render.threads = 2;
     let high = LodConfig {
         preset: LodChoice::Custom,
@@ -103,10 +103,16 @@ fn tiny_compare_runs_end_to_end_and_writes_every_file() {
         high,
         low,
         rows_deg: (0.0, -5.0),
+        max_boost: 16,
         out: dir.clone(),
         progress: false,
     };
     let s = app::compare::run(&job).unwrap();
+    // The pilot found the sun's glitter and boosted some analysed pixels, no other.
+    assert_eq!(s.sampling.max_boost, 16);
+    assert!(s.sampling.boosted_pixels > 0, "{:?}", s.sampling);
+    assert!(s.sampling.boosted_pixels < s.sampling.analysed_pixels / 2);
+    assert!(s.sampling.cost_factor > 1.0 && s.sampling.cost_factor <= 2.0);
     for sc in Scenario::ALL {
         for ext in ["exr", "png"] {
             let f = dir.join(format!("{}.{ext}", sc.name()));
@@ -132,15 +138,29 @@ fn tiny_compare_runs_end_to_end_and_writes_every_file() {
         "improvement_ratio_ci",
         "improvement_significant",
         "improvement_ratio_median_rows",
+        "improvement_ratio_trimmed",
         "noise_model_check",
         "estimates",
+        "sampling",
+        "commit",
     ] {
         assert!(summary.get(key).is_some(), "summary.json lacks {key}");
     }
+    // An unbounded interval (the denominator's band variance can fall to 0 in a replicate)
+    // has null, JSON's nothing, for its upper end.
     let ci = &summary["improvement_ratio_ci"];
-    assert!(ci[0].as_f64().unwrap() <= ci[1].as_f64().unwrap());
+    let hi = ci[1].as_f64().unwrap_or(f64::INFINITY);
+    assert!(ci[0].as_f64().unwrap() <= hi, "{ci}");
     for sc in summary["estimates"]["scenarios"].as_array().unwrap() {
-        for key in ["trend_std", "residual_std", "std_corrected", "rows"] {
+        for key in [
+            "trend_std",
+            "residual_std",
+            "std_corrected",
+            "variance_corrected",
+            "noisy_rows",
+            "std_corrected_trimmed",
+            "rows",
+        ] {
             assert!(sc.get(key).is_some(), "scenario estimate lacks {key}");
         }
     }
@@ -172,21 +192,41 @@ fn bench_accuracy_writes_its_files_and_a_configuration_matches_itself() {
         spp: vec![8],
         reference: Tessellation::preset(LodChoice::PaperLow),
         reference_spp: 32,
+        reference_spp_max: 512,
+        reference_max_boost: 4,
         out: dir.clone(),
         progress: false,
     };
     let r = app::bench::accuracy::run(&job).unwrap();
     assert_eq!(r.points.len(), 2, "mapped and vertex");
-    // The mapped point is the reference's configuration with fewer samples of the same seed:
-    // its error is zero within noise.
+    // The mapped point is the reference's configuration with fewer samples: no bias to
+    // resolve, and its error, noise included, is its noise.
     let same = &r.points[0];
-    assert!(same.error_ci[0] <= 1e-12, "{same:?}");
+    assert!(!same.bias_resolved && same.bias_ci[0] == 0.0, "{same:?}");
+    assert!(
+        same.error_ci[0] <= same.noise && same.noise <= same.error_ci[1],
+        "{same:?}"
+    );
+    // The reference took samples until its noise was a quarter of the smallest error, or its
+    // cap.
+    let rf = &r.reference;
+    assert!(rf.noise_share <= 0.25 || rf.spp * 4 > 512, "{rf:?}");
+    assert_eq!(rf.spp_tried.last(), Some(&rf.spp));
     for f in ["frontier.csv", "frontier.png", "summary.json"] {
         assert!(dir.join(f).metadata().unwrap().len() > 50, "{f}");
     }
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
-    for key in ["points", "reference", "csv", "png", "front"] {
+    for key in [
+        "points",
+        "reference",
+        "reference_noise_share",
+        "monotone_within_intervals",
+        "commit",
+        "csv",
+        "png",
+        "front",
+    ] {
         assert!(v.get(key).is_some(), "{key}");
     }
     for key in [
@@ -197,6 +237,8 @@ fn bench_accuracy_writes_its_files_and_a_configuration_matches_itself() {
         "seconds_total",
         "error",
         "error_ci",
+        "bias",
+        "bias_ci",
         "pareto",
     ] {
         assert!(v["points"][0].get(key).is_some(), "point lacks {key}");

@@ -6,6 +6,7 @@ mod common;
 mod defects;
 #[cfg(feature = "embree")]
 mod embree;
+mod estimator;
 mod frames;
 mod lod;
 mod passes;

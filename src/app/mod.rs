@@ -24,6 +24,32 @@ pub mod study;
 
 use std::error::Error;
 
+/// The commit of the checkout this binary was built from, as `git describe --always --dirty`
+/// reads it now (`-dirty` when that checkout has uncommitted changes), or "unknown" when the
+/// checkout or git is not there. Results that will be committed carry it, so that a figure
+/// names the code that measured it.
+pub fn commit() -> &'static str {
+    static COMMIT: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    COMMIT.get_or_init(|| {
+        std::process::Command::new("git")
+            .args(["-C", env!("CARGO_MANIFEST_DIR")])
+            .args([
+                "describe",
+                "--always",
+                "--dirty",
+                "--abbrev=12",
+                "--exclude=*",
+            ])
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .and_then(|o| String::from_utf8(o.stdout).ok())
+            .map(|s| s.trim().to_string())
+            .filter(|s| !s.is_empty())
+            .unwrap_or_else(|| "unknown".into())
+    })
+}
+
 type BoxError = Box<dyn Error + Send + Sync>;
 
 /// What went wrong in a job, classed by who can fix it.

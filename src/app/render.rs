@@ -57,6 +57,7 @@ fn run_pass(job: &RenderJob, k: usize, n: usize) -> Result<RenderReport, AppErro
     let samples = Samples {
         pass: k - 1,
         passes: n,
+        boost: None,
     };
     let prepared = prepare(&job.scene)?;
     let (r, states) = prepared.render_samples(&job.scene, 0, samples, true, job.progress)?;

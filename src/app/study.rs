@@ -41,6 +41,10 @@ pub const RANGES: Ranges = Ranges {
     rms_m: (0.08, 0.6),
 };
 
+fn uniform() -> u16 {
+    1
+}
+
 /// `plan.toml`: what every case shares, and how the cases were drawn.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -52,6 +56,10 @@ pub struct Plan {
     pub high: LodConfig,
     pub low: LodConfig,
     pub rows_deg: (f64, f64),
+    /// Most samples a noisy pixel may take (`compare --max-boost`); plans written before it
+    /// existed read 1, a uniform render, as they ran.
+    #[serde(default = "uniform")]
+    pub max_boost: u16,
     /// Sky maps the cases draw from, in `skies/` beside this file.
     pub skies: Vec<String>,
     pub ranges: Ranges,
@@ -68,6 +76,7 @@ pub struct PlanJob {
     pub base: SceneConfig,
     pub high: LodConfig,
     pub low: LodConfig,
+    pub max_boost: u16,
     /// The sky collection to draw from.
     pub skies_dir: PathBuf,
 }
@@ -170,6 +179,7 @@ pub fn plan(job: &PlanJob) -> Result<PlanReport, AppError> {
         high: job.high.clone(),
         low: job.low.clone(),
         rows_deg: (0.0, -5.0),
+        max_boost: job.max_boost,
         skies: skies.clone(),
         ranges: RANGES,
     };
@@ -236,6 +246,7 @@ pub fn run_case(
         low: plan.low,
         scene,
         rows_deg: plan.rows_deg,
+        max_boost: plan.max_boost,
         out: cdir,
         progress,
     };
@@ -272,6 +283,9 @@ pub struct CaseRow {
 /// `study summarize`'s `summary.json`.
 #[derive(Clone, Debug, Serialize)]
 pub struct StudySummary {
+    /// The commit of the vastocean that summarized the study (each case's summary.json names
+    /// the one that ran it).
+    pub commit: &'static str,
     pub cases: usize,
     pub finished: usize,
     pub missing: Vec<usize>,
@@ -387,6 +401,7 @@ pub fn summarize(dir: &Path) -> Result<StudySummary, AppError> {
     );
     write_outputs(&rows, &cases_csv, &per_sky_csv, &scatter_png)?;
     let summary = StudySummary {
+        commit: super::commit(),
         cases: plan.cases,
         finished: rows.len(),
         missing,

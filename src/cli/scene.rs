@@ -205,6 +205,11 @@ pub struct CompareArgs {
     /// The low tessellation.
     #[arg(long, value_parser = choice::<LodChoice>(), default_value = "paper-low")]
     low: LodChoice,
+    /// Most samples a noisy pixel may take, in multiples of --spp: a pilot render finds the
+    /// analysed pixels whose noise dominates (sun glints) and they get up to this many times
+    /// the samples, the extra at most doubling the work. 1 renders every pixel alike.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u16).range(1..=1024))]
+    max_boost: u16,
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
@@ -233,6 +238,7 @@ impl CompareArgs {
             low: lod(self.low),
             scene,
             rows_deg: self.rows,
+            max_boost: self.max_boost,
             out: self.out.clone(),
             progress: true,
         })

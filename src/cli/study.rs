@@ -54,6 +54,10 @@ pub enum StudyCommand {
         /// photographs clipped theirs (sky.clip_relative in each case's scene).
         #[arg(long)]
         clip_sun: Option<f32>,
+        /// Most samples a noisy pixel may take in each case's comparison, in multiples of
+        /// --spp (see `compare --max-boost`; 1 renders every pixel alike).
+        #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u16).range(1..=1024))]
+        max_boost: u16,
         /// The sky collection to draw from.
         #[arg(long, default_value = "skies")]
         skies: PathBuf,
@@ -121,6 +125,7 @@ pub fn run(c: StudyCommand) -> Result<()> {
             low_near_size,
             wrong_side,
             clip_sun,
+            max_boost,
             skies,
             json,
         } => {
@@ -147,6 +152,7 @@ pub fn run(c: StudyCommand) -> Result<()> {
                 base,
                 high: lod(high, high_near_size),
                 low: lod(low, low_near_size),
+                max_boost,
                 skies_dir: skies,
             };
             emit(&app::study::plan(&job)?, json)

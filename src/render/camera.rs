@@ -51,6 +51,11 @@ impl Camera {
         }
     }
 
+    /// The full-sphere row of image row 0 (0 without a band).
+    pub fn first_row(&self) -> usize {
+        self.row0
+    }
+
     /// Elevation in degrees at the centre of image row `y` (equirectangular camera).
     pub fn row_elevation_deg(&self, y: usize) -> f64 {
         equirect::row_elevation_deg(self.row0 + y, self.width / 2)

@@ -42,7 +42,8 @@ pub const MAX_BATCHES: usize = 8;
 pub struct Batches {
     /// Batches per pixel.
     pub k: usize,
-    /// Samples in each batch (before NaN samples are dropped, which are counted apart).
+    /// Samples in each batch (before NaN samples are dropped, which are counted apart); a
+    /// boosted pixel's batches hold its boost times these.
     pub spp: Vec<u32>,
     /// `luminance[pixel * k + b]`: the mean luminance of batch b of a pixel.
     pub luminance: Vec<f32>,
@@ -61,6 +62,26 @@ pub struct Film {
 }
 
 impl Film {
+    /// Image rows `first..first + rows` of the film (a band of a panorama), batches and all.
+    pub fn rows(&self, first: usize, rows: usize) -> Film {
+        let w = self.image.width;
+        let (a, b) = (first * w, (first + rows) * w);
+        Film {
+            image: RgbImage {
+                width: w,
+                height: rows,
+                pixels: self.image.pixels[a..b].to_vec(),
+            },
+            var_y: self.var_y[a..b].to_vec(),
+            spp: self.spp,
+            batches: self.batches.as_ref().map(|bt| Batches {
+                k: bt.k,
+                spp: bt.spp.clone(),
+                luminance: bt.luminance[a * bt.k..b * bt.k].to_vec(),
+            }),
+        }
+    }
+
     /// RMS over the image of the standard error of the pixel luminance, or `None` with fewer
     /// than two samples per pixel.
     pub fn noise_rms(&self) -> Option<f64> {
@@ -196,17 +217,29 @@ impl PixelState {
     }
 }
 
-/// Which of a pixel's `spp` samples a render takes: those with index s = `pass` mod `passes`
-/// (all of them for pass 0 of 1). The samples of passes 0..passes are disjoint and together
-/// are exactly those of one render.
+/// Which of a pixel's samples a render takes: those with index s = `pass` mod `passes` (all of
+/// them for pass 0 of 1). The samples of passes 0..passes are disjoint and together are
+/// exactly those of one render. A pixel takes `spp` samples, or `spp * boost[pixel]` when a
+/// boost map is given (row-major, one factor a pixel): its further samples continue its
+/// sequences, so its batches stay independent and equally filled.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Samples {
+pub struct Samples<'a> {
     pub pass: usize,
     pub passes: usize,
+    pub boost: Option<&'a [u16]>,
 }
 
-impl Samples {
-    pub const ALL: Samples = Samples { pass: 0, passes: 1 };
+impl Samples<'_> {
+    pub const ALL: Samples<'static> = Samples {
+        pass: 0,
+        passes: 1,
+        boost: None,
+    };
+
+    /// Samples of pixel `pixel` at `spp` samples per pixel before any boost.
+    fn of_pixel(&self, pixel: usize, spp: u32) -> u32 {
+        self.boost.map_or(spp, |b| spp * u32::from(b[pixel]))
+    }
 }
 
 /// What one pixel accumulates: its state and the luminance sums of its batches.
@@ -271,8 +304,8 @@ pub fn render_image(
     (film, c)
 }
 
-/// [`render_image`] taking only the `samples` of `spp` (all, or one pass); also returns each
-/// pixel's state, which merges exactly with other passes'.
+/// [`render_image`] taking only the `samples` of `spp` (all, or one pass, and boosted pixels
+/// more); also returns each pixel's state, which merges exactly with other passes'.
 #[allow(clippy::too_many_arguments)]
 pub fn render_image_samples(
     scene: &SceneRef,
@@ -321,7 +354,8 @@ pub fn render_image_samples(
                     // not traced for a pass that has no sample of this render's spp.
                     let pixel_rays = camera.pixel_rays(x, y);
                     let centre = pixel_rays.direction(0.5, 0.5);
-                    let predicted = if (samples.pass as u32) < spp {
+                    let pixel_spp = samples.of_pixel(pixel as usize, spp);
+                    let predicted = if (samples.pass as u32) < pixel_spp {
                         scene.predict_camera_prim(&Ray::new(origin, centre.to_array()), &mut c)
                     } else {
                         None
@@ -329,7 +363,7 @@ pub fn render_image_samples(
                     // The pixel's samples go to the integrator CAMERA_BATCH at a time, so that
                     // the camera rays the BVH must trace are traced together (one Embree
                     // packet).
-                    let mut sample_ids = (samples.pass as u32..spp).step_by(samples.passes);
+                    let mut sample_ids = (samples.pass as u32..pixel_spp).step_by(samples.passes);
                     loop {
                         let mut ids = [0u32; CAMERA_BATCH];
                         let mut n = 0;

@@ -478,7 +478,7 @@ impl Prepared {
     }
 
     /// As [`Prepared::render_batches`], taking only `samples` of each pixel's (one pass of
-    /// several), and returning each pixel's exact state as well when `keep_states` (what a
+    /// several, or more of some pixels' than others'), and returning each pixel's exact state as well when `keep_states` (what a
     /// pass file holds; empty otherwise).
     pub fn render_samples(
         &self,

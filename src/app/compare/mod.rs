@@ -4,7 +4,6 @@
 //! scenario that uses it; then the per-row statistics against the baseline (scenario 1), the
 //! renders, `stats.csv`, the plots and `summary.json`.
 
-use std::fmt;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -12,13 +11,13 @@ use serde::Serialize;
 
 use super::AppError;
 use crate::analysis::error::{
-    EstimateError, Estimates, Estimator, Inputs, Interval, RatioEstimate,
+    EstimateError, Estimates, Estimator, Inputs, Interval, MIN_BATCHES, RatioEstimate,
 };
 use crate::analysis::plot;
 use crate::config::{LodConfig, NormalMode, Projection, SceneConfig};
-use crate::image_io::{auto_exposure, write_atomically, write_exr_with, write_json, write_png};
-use crate::render::film::MAX_BATCHES;
-use crate::render::pipeline::{Rendered, prepare};
+use crate::image_io::{auto_exposure, write_exr_with, write_json, write_png};
+use crate::render::film::{MAX_BATCHES, Samples};
+use crate::render::pipeline::{Prepared, Rendered, prepare};
 
 /// What to compare: one scene (ocean, sky, camera, samples) and the two tessellations.
 #[derive(Clone, Debug, Serialize)]
@@ -28,6 +27,9 @@ pub struct CompareJob {
     pub low: LodConfig,
     /// Elevation rows analysed: from `rows_deg.0` down to `rows_deg.1` (the paper: 0 to -5).
     pub rows_deg: (f64, f64),
+    /// Most samples a noisy analysed pixel may take, in multiples of the scene's spp; 1
+    /// renders every pixel alike (see [`sampling`]).
+    pub max_boost: u16,
     /// Output folder.
     pub out: PathBuf,
     /// Progress on stderr.
@@ -108,9 +110,12 @@ pub struct ScenarioInfo {
 }
 
 /// `summary.json`: band averages (the paper's, and noise-corrected with 95 % intervals), the
-/// improvement ratio and its verdict, and what each scenario cost.
+/// improvement ratio and its verdict, and what each scenario cost. JSON has no infinity: an
+/// unbounded interval end (a ratio whose denominator fell to 0 in some replicates) is null.
 #[derive(Clone, Debug, Serialize)]
 pub struct CompareSummary {
+    /// The commit of the vastocean that measured this (see [`crate::app::commit`]).
+    pub commit: &'static str,
     /// The paper's statistic: band average of the rows' std of Y(scenario) - Y(baseline),
     /// Monte Carlo noise included.
     pub std_high_unmapped: f64,
@@ -133,9 +138,11 @@ pub struct CompareSummary {
     pub improvement_ratio_ci: [f64; 2],
     /// The interval excludes 1.
     pub improvement_significant: bool,
-    pub improvement_ratio_median_rows: f64,
+    /// The same ratio of the median and of the trimmed mean over rows, and without glint rows.
+    pub improvement_ratio_median_rows: Interval,
+    pub improvement_ratio_trimmed: Interval,
     pub improvement_ratio_without_glint: Interval,
-    /// When not significant: the spp that would resolve it, if more samples can.
+    /// When not significant: the spp that would resolve it if the ratio stayed put.
     pub improvement_spp_to_resolve: Option<u64>,
     /// Of the trend and of the residual detail.
     pub improvement_ratio_trend: Interval,
@@ -145,6 +152,8 @@ pub struct CompareSummary {
     pub rows: usize,
     pub rows_deg: (f64, f64),
     pub spp: u32,
+    /// Where the samples went: the pilot, the boosted pixels, the cost.
+    pub sampling: SamplingReport,
     pub wrong_side: crate::config::WrongSide,
     /// Every scenario against the baseline: per-row and band estimates with intervals.
     pub estimates: Estimates,
@@ -155,10 +164,6 @@ pub struct CompareSummary {
     pub stats_png: PathBuf,
     pub sheet_png: PathBuf,
 }
-
-/// The noise floor's measured over predicted variance beyond which (interval and all) the noise
-/// estimate is reported as unreliable.
-pub const NOISE_CHECK_RANGE: (f64, f64) = (0.8, 1.25);
 
 /// The scene as one tessellation renders it.
 fn with_lod(scene: &SceneConfig, lod: &LodConfig) -> SceneConfig {
@@ -175,6 +180,17 @@ fn check(job: &CompareJob) -> Result<(), AppError> {
         let scene = with_lod(&job.scene, lod);
         scene.validate()?;
         crate::lod::params_for(&scene.lod, &scene.camera)?;
+    }
+    let spp = job.scene.render.spp;
+    if (spp as usize) < MIN_BATCHES {
+        return Err(AppError::input(format!(
+            "compare needs at least {MIN_BATCHES} samples per pixel (--spp), one in each of the {MIN_BATCHES} independent batches its error estimate reads (got {spp})"
+        )));
+    }
+    if job.max_boost == 0 {
+        return Err(AppError::input(
+            "the most boost (--max-boost) is at least 1",
+        ));
     }
     let (top, bottom) = job.rows_deg;
     if !(top.is_finite() && bottom.is_finite() && top > bottom) {
@@ -198,25 +214,70 @@ fn check(job: &CompareJob) -> Result<(), AppError> {
     super::check_output_dir(&job.out)
 }
 
-/// Renders every scenario, each tessellation prepared once; returned in [`Scenario::ALL`]
-/// order.
-fn render_scenarios(job: &CompareJob) -> Result<Vec<(ScenarioInfo, Rendered)>, AppError> {
-    let mut out = Vec::new();
-    for (high, lod) in [(true, &job.high), (false, &job.low)] {
-        let cfg = with_lod(&job.scene, lod);
+/// Renders every scenario, each tessellation prepared once, after the pilot that places the
+/// samples; returned in [`Scenario::ALL`] order, with how the samples were spent.
+fn render_scenarios(
+    job: &CompareJob,
+) -> Result<(Vec<(ScenarioInfo, Rendered)>, SamplingReport), AppError> {
+    let say = |what: String| {
         if job.progress {
-            eprintln!(
-                "compare: {} tessellation ({:?})",
-                if high { "high" } else { "low" },
-                lod.preset
-            );
+            eprintln!("compare: {what}");
         }
-        let prepared = prepare(&cfg)?;
-        for sc in Scenario::ALL.into_iter().filter(|s| s.high() == high) {
+    };
+    let t = Instant::now();
+    // The low tessellation first (its pilots need it), kept while the high one is traced.
+    let (high_cfg, low_cfg) = (
+        with_lod(&job.scene, &job.high),
+        with_lod(&job.scene, &job.low),
+    );
+    say(format!("low tessellation ({:?})", job.low.preset));
+    let low = prepare(&low_cfg)?;
+    let mut pilots = Vec::new();
+    let pilot = |prepared: &Prepared, cfg: &SceneConfig, sc: Scenario| {
+        let mut c = cfg.clone();
+        c.render.normals = sc.normals();
+        c.render.spp = sampling::pilot_spp(cfg.render.spp);
+        c.render.seed = cfg.render.seed.wrapping_add(sampling::PILOT_SEED);
+        say(format!("pilot of {} at {} spp", sc.name(), c.render.spp));
+        prepared.render(&c, job.progress).map(|r| r.film)
+    };
+    let boosting = job.max_boost > 1;
+    if boosting {
+        for sc in [Scenario::LowMapped, Scenario::LowUnmapped] {
+            pilots.push(pilot(&low, &low_cfg, sc)?);
+        }
+    }
+    let mut seconds_pilot = t.elapsed().as_secs_f64();
+    say(format!("high tessellation ({:?})", job.high.preset));
+    let high = prepare(&high_cfg)?;
+    let camera = crate::render::Camera::new(
+        job.scene.camera.projection,
+        job.scene.camera.width,
+        job.scene.camera.aspect,
+    );
+    let boost = if boosting {
+        let t = Instant::now();
+        pilots.push(pilot(&high, &high_cfg, Scenario::HighMapped)?);
+        seconds_pilot += t.elapsed().as_secs_f64();
+        sampling::boost_map(&pilots, &camera, job.rows_deg, job.max_boost)
+    } else {
+        vec![1; camera.width * camera.height]
+    };
+    drop(pilots);
+    let samples = Samples {
+        boost: Some(&boost),
+        ..Samples::ALL
+    };
+    let mut out = Vec::new();
+    for (is_high, prepared, cfg, lod) in [
+        (true, high, &high_cfg, &job.high),
+        (false, low, &low_cfg, &job.low),
+    ] {
+        for sc in Scenario::ALL.into_iter().filter(|s| s.high() == is_high) {
             let mut c = cfg.clone();
             c.render.normals = sc.normals();
             c.render.seed = cfg.render.seed.wrapping_add(sc.seed_offset());
-            let r = prepared.render_batches(&c, MAX_BATCHES, job.progress)?;
+            let (r, _) = prepared.render_samples(&c, MAX_BATCHES, samples, false, job.progress)?;
             let rep = &r.report;
             let info = ScenarioInfo {
                 name: sc,
@@ -235,64 +296,38 @@ fn render_scenarios(job: &CompareJob) -> Result<Vec<(ScenarioInfo, Rendered)>, A
             };
             out.push((info, r));
         }
+        // The high tessellation's BVH is freed here, before the low one is traced.
+        drop(prepared);
     }
     out.sort_by_key(|(info, _)| Scenario::ALL.iter().position(|s| *s == info.name));
-    Ok(out)
-}
-
-/// `stats.csv`: one line per analysed row; per scenario the paper's mean and std (the
-/// columns of earlier versions, first), then the noise, the corrected std with its interval and
-/// whether the row is a glint outlier.
-fn write_stats_csv(path: &Path, e: &Estimates) -> Result<(), AppError> {
-    Ok(write_atomically(path, |w| {
-        use std::io::Write;
-        write!(w, "elevation_deg")?;
-        for sc in &e.scenarios {
-            write!(w, ",mean_{0},std_{0}", sc.name)?;
-        }
-        for sc in &e.scenarios {
-            write!(
-                w,
-                ",noise_{0},std_corrected_{0},std_corrected_lo_{0},std_corrected_hi_{0},glint_{0}",
-                sc.name
-            )?;
-        }
-        writeln!(w)?;
-        for i in 0..e.rows {
-            write!(w, "{:.6}", e.scenarios[0].rows[i].elevation_deg)?;
-            for sc in &e.scenarios {
-                let r = &sc.rows[i];
-                write!(w, ",{:.9},{:.9}", r.mean, r.std)?;
-            }
-            for sc in &e.scenarios {
-                let r = &sc.rows[i];
-                write!(
-                    w,
-                    ",{:.9},{:.9},{:.9},{:.9},{}",
-                    r.noise,
-                    r.std_corrected,
-                    r.std_corrected_ci[0],
-                    r.std_corrected_ci[1],
-                    u8::from(r.glint)
-                )?;
-            }
-            writeln!(w)?;
-        }
-        Ok(())
-    })?)
+    let report = sampling::report(
+        &boost,
+        &camera,
+        job.rows_deg,
+        job.scene.render.spp,
+        job.max_boost,
+        job.scene.render.seed.wrapping_add(sampling::PILOT_SEED),
+        seconds_pilot,
+    );
+    Ok((out, report))
 }
 
 /// Runs the comparison into `job.out`.
 pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
     check(job)?;
     let t_total = Instant::now();
-    let runs = render_scenarios(job)?;
+    let (runs, sampling) = render_scenarios(job)?;
     let (top, bottom) = job.rows_deg;
 
     // One exposure for all, so the sheet compares like with like.
     let exposure = auto_exposure(&runs[0].1.film.image);
     for (info, r) in &runs {
-        write_exr_with(&info.exr, &r.film.image, &[("Y.variance", &r.film.var_y)])?;
+        let channels = film_channels(&r.film);
+        let extra: Vec<(&str, &[f32])> = channels
+            .iter()
+            .map(|(n, v)| (n.as_str(), v.as_slice()))
+            .collect();
+        write_exr_with(&info.exr, &r.film.image, &extra)?;
         write_png(&info.png, &r.film.image, exposure)?;
     }
 
@@ -342,6 +377,7 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
 
     let e = &estimates.scenarios;
     let summary = CompareSummary {
+        commit: super::commit(),
         std_high_unmapped: e[0].std,
         std_low_mapped: e[1].std,
         std_low_unmapped: e[2].std,
@@ -359,6 +395,7 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
         improvement_ratio_ci: improvement.corrected.ci,
         improvement_significant: improvement.significant,
         improvement_ratio_median_rows: improvement.median_rows,
+        improvement_ratio_trimmed: improvement.trimmed,
         improvement_ratio_without_glint: improvement.without_glint,
         improvement_spp_to_resolve: improvement.spp_to_resolve,
         improvement_ratio_trend: improvement.trend,
@@ -367,6 +404,7 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
         rows: estimates.rows,
         rows_deg: (top, bottom),
         spp: job.scene.render.spp,
+        sampling,
         wrong_side: job.scene.render.wrong_side,
         scenarios: runs.into_iter().map(|(info, _)| info).collect(),
         estimates,
@@ -380,117 +418,8 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
     Ok(summary)
 }
 
-impl fmt::Display for CompareSummary {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let ci = |i: &Interval| format!("{:.5} [{:.5}, {:.5}]", i.value, i.ci[0], i.ci[1]);
-        let num = |x: f64| {
-            if x.is_finite() {
-                format!("{x:.2}")
-            } else {
-                "n/a".into()
-            }
-        };
-        writeln!(
-            f,
-            "compare: {} rows from {} to {} degrees at {} spp; band-averaged std of the luminance difference from the baseline",
-            self.rows, self.rows_deg.0, self.rows_deg.1, self.spp
-        )?;
-        writeln!(
-            f,
-            "  (paper's statistic, noise included | noise-corrected with 95% interval | RMS noise)"
-        )?;
-        for e in &self.estimates.scenarios {
-            writeln!(
-                f,
-                "  {:<14} {:>9.5} | {} | {:.5}{}",
-                e.name,
-                e.std,
-                ci(&e.std_corrected),
-                e.noise,
-                if e.significant {
-                    ""
-                } else {
-                    "  (not significantly different from the baseline)"
-                }
-            )?;
-        }
-        writeln!(
-            f,
-            "  noise model check (noise floor, measured / predicted variance): {}",
-            ci(&self.noise_model_check)
-        )?;
-        let r = &self.improvement;
-        writeln!(
-            f,
-            "  improvement ratio (low unmapped / low mapped): paper's statistic {}; corrected {} [{}, {}]; median over rows {}; trend {}, residual {}",
-            num(r.plain),
-            num(r.corrected.value),
-            num(r.corrected.ci[0]),
-            num(r.corrected.ci[1]),
-            num(r.median_rows),
-            num(r.trend.value),
-            num(r.residual.value)
-        )?;
-        if r.significant {
-            writeln!(f, "  normal mapping's effect is significant at 95%")?;
-        } else {
-            match r.spp_to_resolve {
-                Some(n) => writeln!(
-                    f,
-                    "  NOT significant at 95%: about {n} spp would resolve it if the ratio stays near {:.2}",
-                    r.corrected.value
-                )?,
-                None => writeln!(
-                    f,
-                    "  NOT significant at 95%, and more samples alone would not resolve it: {:.0}% of the interval's variance is spread over azimuth, not noise (render wider, or more cases)",
-                    100.0 * (1.0 - r.noise_share_of_variance)
-                )?,
-            }
-        }
-        let glint = &self.estimates.scenarios[0].glint_rows_deg;
-        if !glint.is_empty() {
-            let w = &r.without_glint;
-            writeln!(
-                f,
-                "  {} of {} rows cross the sun's glint ({:.2} to {:.2} degrees); without them the corrected ratio is {} [{}, {}]",
-                glint.len(),
-                self.rows,
-                glint.first().copied().unwrap_or(0.0),
-                glint.last().copied().unwrap_or(0.0),
-                num(w.value),
-                num(w.ci[0]),
-                num(w.ci[1])
-            )?;
-        }
-        let check = &self.noise_model_check;
-        if check.ci[1] < NOISE_CHECK_RANGE.0 || check.ci[0] > NOISE_CHECK_RANGE.1 {
-            writeln!(
-                f,
-                "  warning: the noise floor's measured / predicted variance is {} [{}, {}], well away from 1: the noise estimate is unreliable here (heavy-tailed samples, usually a bright sun's glint); trust the summary without glint rows, clip the sun or render more samples",
-                num(check.value),
-                num(check.ci[0]),
-                num(check.ci[1])
-            )?;
-        }
-        for sc in &self.scenarios {
-            writeln!(
-                f,
-                "  {:<14} {:>9} triangles  tessellation {:.2} s  BVH {:.2} s  render {:.2} s",
-                sc.name.name(),
-                sc.triangles,
-                sc.seconds_tessellation,
-                sc.seconds_build,
-                sc.seconds_render
-            )?;
-        }
-        let dir = self.stats_csv.parent().unwrap_or(Path::new("."));
-        write!(
-            f,
-            "  wrote {} {} {} and the renders in {}",
-            self.stats_csv.display(),
-            self.stats_png.display(),
-            self.sheet_png.display(),
-            dir.display()
-        )
-    }
-}
+mod report;
+pub mod sampling;
+pub use report::NOISE_CHECK_RANGE;
+use report::{film_channels, write_stats_csv};
+pub use sampling::SamplingReport;

@@ -1,0 +1,171 @@
+//! What `bench accuracy` writes and prints: `frontier.csv`, `frontier.png`, `summary.json` and
+//! the table.
+
+use std::fmt;
+use std::time::Instant;
+
+use super::{AccuracyJob, AccuracyReport, Point, REFERENCE_NOISE_SHARE, ROWS, Reference};
+use super::{figure, not_monotone};
+use crate::analysis::charts::{FrontierPoint, frontier};
+use crate::app::AppError;
+use crate::config::NormalMode;
+use crate::image_io::{stage, write_json};
+
+pub(super) fn write(
+    job: &AccuracyJob,
+    points: Vec<Point>,
+    reference: Reference,
+    t0: Instant,
+) -> Result<AccuracyReport, AppError> {
+    let (csv, png, json) = (
+        job.out.join("frontier.csv"),
+        job.out.join("frontier.png"),
+        job.out.join("summary.json"),
+    );
+    let staged = stage(&csv, |w| {
+        use std::io::Write;
+        writeln!(
+            w,
+            "lod,normals,spp,triangles,seconds_ocean,seconds_tessellation,seconds_build,seconds_trace,seconds_normal_map,seconds_total,memory_bytes,rays,error,error_lo,error_hi,bias,bias_lo,bias_hi,bias_resolved,error_plain,noise,rmse_relative,rmse_relative_lo,rmse_relative_hi,pareto"
+        )?;
+        for p in &points {
+            writeln!(
+                w,
+                "{},{},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{},{:.6},{:.6},{:.6},{:.6},{:.6},{}",
+                p.lod,
+                p.normals,
+                p.spp,
+                p.triangles,
+                p.seconds_ocean,
+                p.seconds_tessellation,
+                p.seconds_build,
+                p.seconds_trace,
+                p.seconds_normal_map,
+                p.seconds_total,
+                p.memory_bytes,
+                p.rays,
+                p.error,
+                p.error_ci[0],
+                p.error_ci[1],
+                p.bias,
+                p.bias_ci[0],
+                p.bias_ci[1],
+                p.bias_resolved,
+                p.error_plain,
+                p.noise,
+                p.rmse_relative,
+                p.rmse_relative_ci[0],
+                p.rmse_relative_ci[1],
+                p.pareto
+            )?;
+        }
+        Ok(())
+    })?;
+    let chart: Vec<FrontierPoint> = points
+        .iter()
+        .map(|p| FrontierPoint {
+            seconds: p.seconds_total,
+            error: p.error,
+            error_ci: p.error_ci,
+            group: usize::from(p.normals == NormalMode::Vertex),
+            pareto: p.pareto,
+            label: (p.lod.starts_with("paper") && p.spp == *job.spp.last().unwrap_or(&0))
+                .then(|| format!("  {} {}", p.lod, p.normals)),
+        })
+        .collect();
+    frontier(
+        &png,
+        &format!(
+            "against {} mapped, {} spp ({} px): rows 0 to -5 degrees, noise included",
+            reference.lod, reference.spp, job.width
+        ),
+        "std of the luminance difference from the converged image",
+        &["mapped normals", "vertex normals"],
+        &chart,
+    )
+    .map_err(|m| AppError::Run(format!("cannot draw {}: {m}", png.display()).into()))?;
+    let mut front: Vec<Point> = points.iter().filter(|p| p.pareto).cloned().collect();
+    front.sort_by(|a, b| a.seconds_total.total_cmp(&b.seconds_total));
+    let not_monotone = not_monotone(&points);
+    let report = AccuracyReport {
+        commit: crate::app::commit(),
+        reference_noise_share: reference.noise_share,
+        monotone_within_intervals: not_monotone.is_empty(),
+        not_monotone,
+        points,
+        reference,
+        front,
+        width: job.width,
+        rows_deg: ROWS,
+        seconds_total: t0.elapsed().as_secs_f64(),
+        csv,
+        png,
+        json: json.clone(),
+    };
+    staged.commit()?;
+    write_json(&json, &report)?;
+    Ok(report)
+}
+
+impl fmt::Display for AccuracyReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let r = &self.reference;
+        writeln!(
+            f,
+            "speed / accuracy at {} px against {} mapped at {} spp over rows {} to {} degrees ({} triangles; its noise {:.2e}, {:.0}% of the smallest error{})",
+            self.width,
+            r.lod,
+            r.spp,
+            self.rows_deg.0,
+            self.rows_deg.1,
+            r.triangles,
+            r.noise_band,
+            100.0 * r.noise_share,
+            if r.noise_share > REFERENCE_NOISE_SHARE {
+                format!(
+                    ", above the {:.0}% it should be: the reference's sample cap was reached",
+                    100.0 * REFERENCE_NOISE_SHARE
+                )
+            } else {
+                String::new()
+            }
+        )?;
+        writeln!(
+            f,
+            "  lod          normals  spp   triangles   seconds   error, noise included [95%]   bias [95%]                  rel. RMSE [95%]           front"
+        )?;
+        for p in &self.points {
+            writeln!(
+                f,
+                "  {:<12} {:<7} {:>4} {:>11} {:>9.2}   {:<29} {:<27} {:.4} [{:.4}, {:.4}]   {}",
+                p.lod,
+                p.normals.to_string(),
+                p.spp,
+                p.triangles,
+                p.seconds_total,
+                figure(p.error, p.error_ci, p.error_ci[0] > 0.0),
+                figure(p.bias, p.bias_ci, p.bias_resolved),
+                p.rmse_relative,
+                p.rmse_relative_ci[0],
+                p.rmse_relative_ci[1],
+                if p.pareto { "*" } else { "" }
+            )?;
+        }
+        if !self.monotone_within_intervals {
+            writeln!(
+                f,
+                "  error significantly larger at more samples: {}",
+                self.not_monotone.join("; ")
+            )?;
+        }
+        write!(
+            f,
+            "  wrote {} {} {} in {:.0} s (commit {})",
+            self.csv.display(),
+            self.png.display(),
+            self.json.display(),
+            self.seconds_total,
+            self.commit
+        )
+    }
+}

@@ -1,0 +1,188 @@
+//! The sweep's renders and measurements: every configuration rendered and kept over the
+//! analysed band, the reference rendered over that band, and each point's errors against it.
+
+use std::time::Instant;
+
+use super::{AccuracyJob, Point, ROWS, scene_with};
+use crate::analysis::error::{Estimator, Inputs};
+use crate::app::AppError;
+use crate::app::bench::Progress;
+use crate::app::compare::sampling;
+use crate::color::luminance;
+use crate::config::{NormalMode, SceneConfig};
+use crate::render::Camera;
+use crate::render::film::{Film, MAX_BATCHES, Samples};
+use crate::render::pipeline::{Prepared, prepare};
+
+/// A point as rendered: its cost, and its film over the analysed band.
+pub(super) struct Rendered {
+    pub point: Point,
+    pub band: Film,
+}
+
+/// Renders every configuration, each tessellation prepared once; keeps each film's band.
+pub(super) fn render_points(
+    job: &AccuracyJob,
+    band: &Camera,
+    progress: &Progress,
+) -> Result<Vec<Rendered>, AppError> {
+    let mut out = Vec::new();
+    for t in &job.tessellations {
+        let cfg = scene_with(job, t);
+        let p = prepare(&cfg)?;
+        let shared = p.seconds_ocean + p.seconds_tessellation + p.seconds_build;
+        let structures = (p.ocean.bytes() + p.accel.mesh().bytes()) as u64 + p.accel.bytes();
+        for normals in [NormalMode::Mapped, NormalMode::Vertex] {
+            for &spp in &job.spp {
+                let mut c = cfg.clone();
+                c.render.normals = normals;
+                c.render.spp = spp;
+                let r = p.render_batches(&c, MAX_BATCHES, false)?;
+                let (film, rep) = (r.film, r.report);
+                let film_bytes = (film.image.pixels.len() * 12
+                    + film.batches.as_ref().map_or(0, |b| b.luminance.len() * 4))
+                    as u64;
+                let band_film = film.rows(band.first_row(), band.height);
+                out.push(Rendered {
+                    point: Point {
+                        lod: t.name.clone(),
+                        normals,
+                        spp,
+                        triangles: rep.triangles,
+                        seconds_ocean: rep.seconds_ocean,
+                        seconds_tessellation: rep.seconds_tessellation,
+                        seconds_build: rep.seconds_build,
+                        seconds_trace: rep.seconds_trace,
+                        seconds_normal_map: rep.seconds_normal_map,
+                        seconds_total: shared + rep.seconds_trace,
+                        memory_bytes: structures + film_bytes,
+                        rays: rep.rays,
+                        error: f64::NAN,
+                        error_ci: [f64::NAN; 2],
+                        bias: f64::NAN,
+                        bias_ci: [f64::NAN; 2],
+                        bias_resolved: false,
+                        error_plain: f64::NAN,
+                        noise: band_noise(&band_film, band).1.sqrt(),
+                        rmse_relative: f64::NAN,
+                        rmse_relative_ci: [f64::NAN; 2],
+                        pareto: false,
+                    },
+                    band: band_film,
+                });
+                progress.step(format!("{} {normals} {spp} spp", t.name));
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Per analysed row, the mean over its pixels of the variance of the pixel mean; and that
+/// averaged over the rows.
+pub(super) fn band_noise(film: &Film, band: &Camera) -> (Vec<f64>, f64) {
+    let w = film.image.width;
+    let rows: Vec<f64> = (0..film.image.height)
+        .filter(|&y| {
+            let e = band.row_elevation_deg(y);
+            e <= ROWS.0 && e >= ROWS.1
+        })
+        .map(|y| {
+            film.var_y[y * w..(y + 1) * w]
+                .iter()
+                .map(|&v| v as f64)
+                .sum::<f64>()
+                / w as f64
+        })
+        .collect();
+    let mean = rows.iter().sum::<f64>() / rows.len().max(1) as f64;
+    (rows, mean)
+}
+
+/// Mean luminance over the analysed rows.
+pub(super) fn band_luminance(film: &Film, band: &Camera) -> f64 {
+    let w = film.image.width;
+    let (mut s, mut n) = (0.0, 0.0);
+    for y in 0..film.image.height {
+        let e = band.row_elevation_deg(y);
+        if e <= ROWS.0 && e >= ROWS.1 {
+            s += film.image.pixels[y * w..(y + 1) * w]
+                .iter()
+                .map(|&c| luminance(c) as f64)
+                .sum::<f64>();
+            n += w as f64;
+        }
+    }
+    s / n.max(1.0)
+}
+
+/// The reference at `spp`: a pilot, then the analysed rows with the noisiest pixels boosted.
+pub(super) fn render_reference(
+    p: &Prepared,
+    cfg: &SceneConfig,
+    spp: u32,
+    max_boost: u16,
+) -> Result<(Film, sampling::SamplingReport, f64), AppError> {
+    let t = Instant::now();
+    let mut c = cfg.clone();
+    c.render.spp = spp;
+    let camera = Camera::new(c.camera.projection, c.camera.width, c.camera.aspect);
+    let boost = if max_boost > 1 {
+        let mut pc = c.clone();
+        pc.render.spp = sampling::pilot_spp(spp);
+        pc.render.seed = c.render.seed.wrapping_add(sampling::PILOT_SEED);
+        let pilot = p.render(&pc, false)?;
+        sampling::boost_map(&[pilot.film], &camera, ROWS, max_boost)
+    } else {
+        vec![1; camera.width * camera.height]
+    };
+    let seconds_pilot = t.elapsed().as_secs_f64();
+    let samples = Samples {
+        boost: Some(&boost),
+        ..Samples::ALL
+    };
+    let (r, _) = p.render_samples(&c, MAX_BATCHES, samples, false, false)?;
+    let report = sampling::report(
+        &boost,
+        &camera,
+        ROWS,
+        spp,
+        max_boost,
+        c.render.seed.wrapping_add(sampling::PILOT_SEED),
+        seconds_pilot,
+    );
+    Ok((r.film, report, t.elapsed().as_secs_f64()))
+}
+
+/// Every point's errors against one reference.
+pub(super) fn measure(
+    points: &mut [Rendered],
+    reference: &Film,
+    band: &Camera,
+    seed: u64,
+) -> Result<(), AppError> {
+    let (ref_noise, _) = band_noise(reference, band);
+    let scale = band_luminance(reference, band);
+    for r in points.iter_mut() {
+        let e = Estimator::new(&Inputs {
+            camera: band,
+            baseline: reference,
+            scenarios: vec![(r.point.lod.clone(), &r.band)],
+            rows_deg: ROWS,
+            seed,
+        })
+        .map_err(|e| AppError::Run(e.into()))?;
+        let s = e.scenarios().scenarios.remove(0);
+        let total = e.total_error(0, &ref_noise, false);
+        let rms = e.total_error(0, &ref_noise, true);
+        let p = &mut r.point;
+        p.error = total.value;
+        p.error_ci = total.ci;
+        p.bias = s.std_corrected.value;
+        p.bias_ci = s.std_corrected.ci;
+        p.bias_resolved = s.significant;
+        p.error_plain = s.std;
+        p.rmse_relative = rms.value / scale;
+        p.rmse_relative_ci = rms.ci.map(|x| x / scale);
+    }
+    Ok(())
+}

@@ -1,0 +1,81 @@
+//! The error estimator on real renders: `compare` at a few samples per pixel against the same
+//! comparison converged, on the default scene (a physical sun 2000 times the sky, whose glint
+//! is what makes the estimate hard). Heavy: `make test-full`.
+
+use std::path::PathBuf;
+
+use vastocean::app;
+use vastocean::app::compare::{CompareJob, CompareSummary};
+use vastocean::config::{LodChoice, LodConfig, Projection, SceneConfig};
+
+fn tmp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("vastocean-estimator-{}-{name}", std::process::id()))
+}
+
+/// The default scene at 512 px (seven analysed rows), a 30 cm tessellation against paper-low.
+fn compare(spp: u32, seed: u64, max_boost: u16) -> CompareSummary {
+    let mut scene = SceneConfig::default();
+    scene.camera.width = 512;
+    scene.camera.projection = Projection::Equirect {
+        band_deg: Some((1.0, -6.0)),
+    };
+    scene.render.spp = spp;
+    scene.render.seed = seed;
+    scene.render.threads = 2;
+    let out = tmp(&format!("{spp}-{seed}-{max_boost}"));
+    let job = CompareJob {
+        scene,
+        high: LodConfig {
+            preset: LodChoice::Custom,
+            near_size_m: Some(0.3),
+            double_distance_m: Some(18.0),
+            ..LodConfig::default()
+        },
+        low: LodConfig {
+            preset: LodChoice::PaperLow,
+            ..LodConfig::default()
+        },
+        rows_deg: (0.0, -5.0),
+        max_boost,
+        out: out.clone(),
+        progress: false,
+    };
+    let s = app::compare::run(&job).unwrap();
+    let _ = std::fs::remove_dir_all(out);
+    s
+}
+
+/// At 16 and 64 spp, over eight sample seeds, the improvement ratio's 95 % intervals hold the
+/// converged ratio (7 of 8 expected; at least 6 required), and at 64 spp with the glint pixels
+/// boosted the estimates lie within 10 % of it. The estimator this replaced (per-row stds
+/// clipped at 0 and averaged, intervals from a bootstrap over azimuth blocks) covered 50 to
+/// 83 % on the full-size default scene and drifted with spp (docs/error-estimator.md).
+#[test]
+#[ignore]
+fn compare_intervals_hold_the_converged_ratio() {
+    let converged = compare(4096, 1000, 64);
+    let truth = converged.improvement.corrected;
+    // The converged ratio is known to a few per cent.
+    assert!(
+        truth.ci[1] - truth.ci[0] < 0.06 * truth.value,
+        "converged {truth:?}"
+    );
+    let mut report = Vec::new();
+    for (spp, max_boost) in [(16, 64), (64, 64), (64, 1)] {
+        let (mut covered, mut close) = (0, 0);
+        for seed in 1..=8 {
+            let r = compare(spp, seed, max_boost).improvement.corrected;
+            covered += usize::from(r.contains(truth.value));
+            close += usize::from((r.value / truth.value - 1.0).abs() < 0.1);
+            report.push(format!("{spp} spp boost {max_boost} seed {seed}: {r:?}"));
+        }
+        let report = report.join("\n");
+        assert!(covered >= 6, "{covered} of 8 cover {truth:?}:\n{report}");
+        if (spp, max_boost) == (64, 64) {
+            assert!(
+                close >= 7,
+                "{close} of 8 within 10 % of {truth:?}:\n{report}"
+            );
+        }
+    }
+}
