@@ -78,6 +78,28 @@ fn bad_input_is_classed_as_input() {
 }
 
 #[test]
+fn every_shipped_scene_loads_and_validates() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut n = 0;
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let path = e.unwrap().path();
+        if path.extension().is_some_and(|x| x == "toml") {
+            let s = SceneConfig::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            s.validate().unwrap();
+            let sky = s.sky.file.as_ref().expect("a shipped scene names its sky");
+            assert!(
+                sky.is_file(),
+                "{}: {} is missing",
+                path.display(),
+                sky.display()
+            );
+            n += 1;
+        }
+    }
+    assert!(n >= 5, "the paper's five Table 1 cases at least");
+}
+
+#[test]
 fn tiny_compare_runs_end_to_end_and_writes_every_file() {
     use app::compare::Scenario;
     let mut scene = SceneConfig::default();
@@ -441,6 +463,12 @@ fn study_plans_runs_through_gnu_parallel_resumes_and_summarizes() {
         (Some(3), Some(2))
     );
     assert_eq!(v["missing"], serde_json::json!([3]));
+    // Every case was run by this build, whose commit the cases and the summary name.
+    assert_eq!(v["case_commits"], serde_json::json!([v["commit"]]));
+    assert_eq!(
+        v["rows"][0]["cost_factor"].as_f64().map(|c| c >= 1.0),
+        Some(true)
+    );
     let improved = v["improved"].as_u64().unwrap();
     assert!(v["improved_significant"].as_u64().unwrap() <= improved && improved <= 2);
     let on_disk: serde_json::Value =

@@ -275,9 +275,16 @@ pub struct CaseRow {
     pub improvement_ratio_ci: [f64; 2],
     pub improvement_significant: bool,
     pub improvement_ratio_without_glint: f64,
+    /// The ratio of the median and of the trimmed mean over rows (the robust summaries).
+    pub improvement_ratio_median_rows: f64,
+    pub improvement_ratio_trimmed: f64,
     pub glint_rows: usize,
     pub noise_model_check: f64,
+    /// Samples of one scenario over a uniform render's (the boost of the noisy pixels).
+    pub cost_factor: f64,
     pub seconds_total: f64,
+    /// The commit of the vastocean that ran the case.
+    pub commit: String,
 }
 
 /// `study summarize`'s `summary.json`.
@@ -297,6 +304,9 @@ pub struct StudySummary {
     pub median_ratio: f64,
     pub ratio_quartiles: [f64; 2],
     pub seconds_total: f64,
+    /// The commits the finished cases were run with (one, unless the study was resumed with
+    /// another build).
+    pub case_commits: Vec<String>,
     pub rows: Vec<CaseRow>,
     pub cases_csv: PathBuf,
     pub per_sky_csv: PathBuf,
@@ -353,10 +363,11 @@ pub fn summarize(dir: &Path) -> Result<StudySummary, AppError> {
             .entry(sky.clone())
             .or_insert_with(|| sun_elevation(&scene));
         let f = |key: &str| v[key].as_f64().unwrap_or(f64::NAN);
+        // An unbounded upper end is null in JSON.
         let pair = |val: &serde_json::Value| {
             [
                 val[0].as_f64().unwrap_or(f64::NAN),
-                val[1].as_f64().unwrap_or(f64::NAN),
+                val[1].as_f64().unwrap_or(f64::INFINITY),
             ]
         };
         let scenario = |name: &str| {
@@ -385,6 +396,14 @@ pub fn summarize(dir: &Path) -> Result<StudySummary, AppError> {
             improvement_ratio_without_glint: v["improvement_ratio_without_glint"]["value"]
                 .as_f64()
                 .unwrap_or(f64::NAN),
+            improvement_ratio_median_rows: v["improvement_ratio_median_rows"]["value"]
+                .as_f64()
+                .unwrap_or(f64::NAN),
+            improvement_ratio_trimmed: v["improvement_ratio_trimmed"]["value"]
+                .as_f64()
+                .unwrap_or(f64::NAN),
+            cost_factor: v["sampling"]["cost_factor"].as_f64().unwrap_or(1.0),
+            commit: v["commit"].as_str().unwrap_or("unknown").to_string(),
             glint_rows: v["estimates"]["scenarios"][0]["glint_rows_deg"]
                 .as_array()
                 .map_or(0, |a| a.len()),
@@ -417,6 +436,12 @@ pub fn summarize(dir: &Path) -> Result<StudySummary, AppError> {
         median_ratio,
         ratio_quartiles,
         seconds_total: rows.iter().map(|r| r.seconds_total).sum(),
+        case_commits: {
+            let mut c: Vec<String> = rows.iter().map(|r| r.commit.clone()).collect();
+            c.sort();
+            c.dedup();
+            c
+        },
         rows,
         cases_csv,
         per_sky_csv,
@@ -436,12 +461,12 @@ fn write_outputs(
     let cases = stage(cases_csv, |w| {
         writeln!(
             w,
-            "case,wind_m_s,fetch_km,depth_m,rms_m,sky,sun_elevation_deg,std_high_unmapped_corrected,std_low_mapped_corrected,std_low_mapped_lo,std_low_mapped_hi,std_low_unmapped_corrected,std_low_unmapped_lo,std_low_unmapped_hi,improvement_ratio,improvement_ratio_corrected,improvement_ratio_lo,improvement_ratio_hi,improvement_significant,improvement_ratio_without_glint,glint_rows,noise_model_check,seconds_total"
+            "case,wind_m_s,fetch_km,depth_m,rms_m,sky,sun_elevation_deg,std_high_unmapped_corrected,std_low_mapped_corrected,std_low_mapped_lo,std_low_mapped_hi,std_low_unmapped_corrected,std_low_unmapped_lo,std_low_unmapped_hi,improvement_ratio,improvement_ratio_corrected,improvement_ratio_lo,improvement_ratio_hi,improvement_significant,improvement_ratio_without_glint,improvement_ratio_median_rows,improvement_ratio_trimmed,glint_rows,noise_model_check,cost_factor,seconds_total,commit"
         )?;
         for r in rows {
             writeln!(
                 w,
-                "{},{:.3},{:.2},{:.1},{:.4},{},{:.2},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.4},{:.4},{:.4},{:.4},{},{:.4},{},{:.3},{:.1}",
+                "{},{:.3},{:.2},{:.1},{:.4},{},{:.2},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.4},{:.4},{:.4},{:.4},{},{:.4},{:.4},{:.4},{},{:.3},{:.3},{:.1},{}",
                 r.case,
                 r.wind_m_s,
                 r.fetch_km,
@@ -462,9 +487,13 @@ fn write_outputs(
                 r.improvement_ratio_ci[1],
                 r.improvement_significant,
                 r.improvement_ratio_without_glint,
+                r.improvement_ratio_median_rows,
+                r.improvement_ratio_trimmed,
                 r.glint_rows,
                 r.noise_model_check,
-                r.seconds_total
+                r.cost_factor,
+                r.seconds_total,
+                r.commit
             )?;
         }
         Ok(())
