@@ -164,6 +164,8 @@ fn tiny_compare_runs_end_to_end_and_writes_every_file() {
         "noise_model_check",
         "estimates",
         "sampling",
+        "baseline_noise",
+        "baseline_noise_share",
         "commit",
     ] {
         assert!(summary.get(key).is_some(), "summary.json lacks {key}");

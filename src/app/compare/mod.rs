@@ -149,6 +149,11 @@ pub struct CompareSummary {
     pub improvement_ratio_residual: Interval,
     /// The noise floor's measured over predicted variance: about 1 if the noise model holds.
     pub noise_model_check: Interval,
+    /// The baseline's own noise: the RMS standard error of its pixel luminance over the analysed
+    /// rows, and that over the smallest corrected std it ranks (of the three scenarios; at most
+    /// [`BASELINE_NOISE_SHARE`] for the baseline to resolve every difference it ranks).
+    pub baseline_noise: f64,
+    pub baseline_noise_share: f64,
     pub rows: usize,
     pub rows_deg: (f64, f64),
     pub spp: u32,
@@ -214,6 +219,31 @@ fn check(job: &CompareJob) -> Result<(), AppError> {
     super::check_output_dir(&job.out)
 }
 
+/// The largest share of the smallest difference a baseline's own noise may be for `compare`
+/// not to warn.
+pub const BASELINE_NOISE_SHARE: f64 = 0.25;
+
+/// RMS over the analysed rows of the standard error of the film's pixel luminance.
+fn band_noise(
+    film: &crate::render::film::Film,
+    camera: &crate::render::Camera,
+    rows: (f64, f64),
+) -> f64 {
+    let w = film.image.width;
+    let (mut sum, mut n) = (0.0, 0.0);
+    for y in 0..film.image.height {
+        let e = camera.row_elevation_deg(y);
+        if e <= rows.0 && e >= rows.1 {
+            sum += film.var_y[y * w..(y + 1) * w]
+                .iter()
+                .map(|&v| v as f64)
+                .sum::<f64>();
+            n += w as f64;
+        }
+    }
+    (sum / n.max(1.0)).sqrt()
+}
+
 /// Renders every scenario, each tessellation prepared once, after the pilot that places the
 /// samples; returned in [`Scenario::ALL`] order, with how the samples were spent.
 fn render_scenarios(
@@ -259,7 +289,8 @@ fn render_scenarios(
         let t = Instant::now();
         pilots.push(pilot(&high, &high_cfg, Scenario::HighMapped)?);
         seconds_pilot += t.elapsed().as_secs_f64();
-        sampling::boost_map(&pilots, &camera, job.rows_deg, job.max_boost)
+        let limit = sampling::boost_limit(job.scene.render.spp, job.max_boost);
+        sampling::boost_map(&pilots, &camera, job.rows_deg, limit)
     } else {
         vec![1; camera.width * camera.height]
     };
@@ -376,6 +407,11 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
     plot::contact_sheet(&sheet_png, &images, &labels, exposure).map_err(plot_error(&sheet_png))?;
 
     let e = &estimates.scenarios;
+    let baseline_noise = band_noise(&runs[0].1.film, &runs[0].1.camera, job.rows_deg);
+    let smallest = e[..3]
+        .iter()
+        .map(|s| s.std_corrected.value)
+        .fold(f64::INFINITY, f64::min);
     let summary = CompareSummary {
         commit: super::commit(),
         std_high_unmapped: e[0].std,
@@ -401,6 +437,8 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
         improvement_ratio_trend: improvement.trend,
         improvement_ratio_residual: improvement.residual,
         noise_model_check: e[3].variance_over_noise,
+        baseline_noise,
+        baseline_noise_share: baseline_noise / smallest,
         rows: estimates.rows,
         rows_deg: (top, bottom),
         spp: job.scene.render.spp,

@@ -14,8 +14,10 @@ use crate::image_io::write_atomically;
 pub const NOISE_CHECK_RANGE: (f64, f64) = (0.8, 1.25);
 
 /// `stats.csv`: one line per analysed row; per scenario the paper's mean and std (the
-/// columns of earlier versions, first), then the noise, the corrected std with its interval and
-/// whether the row is a glint outlier.
+/// columns of earlier versions, first), then the noise, the corrected std with its interval,
+/// whether the row is a glint outlier, and the corrected variance the std is the root of
+/// (negative where the noise exceeded the signal: such a row's std reads 0 and is below the
+/// noise, not zero).
 pub(super) fn write_stats_csv(path: &Path, e: &Estimates) -> Result<(), AppError> {
     Ok(write_atomically(path, |w| {
         use std::io::Write;
@@ -26,7 +28,7 @@ pub(super) fn write_stats_csv(path: &Path, e: &Estimates) -> Result<(), AppError
         for sc in &e.scenarios {
             write!(
                 w,
-                ",noise_{0},std_corrected_{0},std_corrected_lo_{0},std_corrected_hi_{0},glint_{0}",
+                ",noise_{0},std_corrected_{0},std_corrected_lo_{0},std_corrected_hi_{0},glint_{0},variance_corrected_{0}",
                 sc.name
             )?;
         }
@@ -41,12 +43,13 @@ pub(super) fn write_stats_csv(path: &Path, e: &Estimates) -> Result<(), AppError
                 let r = &sc.rows[i];
                 write!(
                     w,
-                    ",{:.9},{:.9},{:.9},{:.9},{}",
+                    ",{:.9},{:.9},{:.9},{:.9},{},{:.9e}",
                     r.noise,
                     r.std_corrected,
                     r.std_corrected_ci[0],
                     r.std_corrected_ci[1],
-                    u8::from(r.glint)
+                    u8::from(r.glint),
+                    r.variance_corrected
                 )?;
             }
             writeln!(w)?;
@@ -110,7 +113,11 @@ impl fmt::Display for CompareSummary {
                 "  {:<14} {:>9.5} | {} | {:.5} | {:>2} of {} rows noisier than their signal{}",
                 e.name,
                 e.std,
-                ci(&e.std_corrected),
+                if e.significant {
+                    ci(&e.std_corrected)
+                } else {
+                    format!("< {:.5}", e.std_corrected.ci[1])
+                },
                 e.noise,
                 e.noisy_rows,
                 e.rows.len(),
@@ -164,6 +171,15 @@ impl fmt::Display for CompareSummary {
                 self.rows,
                 rows.join(", "),
                 ratio(&r.without_glint)
+            )?;
+        }
+        if self.baseline_noise_share > super::BASELINE_NOISE_SHARE {
+            writeln!(
+                f,
+                "  note: the baseline's own noise ({:.2e}) is {:.0}% of the smallest difference it ranks (more than {:.0}%): the estimates stay unbiased, their intervals are wide; more --spp narrows them",
+                self.baseline_noise,
+                100.0 * self.baseline_noise_share,
+                100.0 * super::BASELINE_NOISE_SHARE
             )?;
         }
         let check = &self.noise_model_check;

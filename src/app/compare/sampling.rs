@@ -42,6 +42,15 @@ pub struct SamplingReport {
     pub seconds_pilot: f64,
 }
 
+/// Most samples one pixel may take (the film's fixed-point sums are exact up to a million).
+pub const MAX_PIXEL_SAMPLES: u64 = 1_000_000;
+
+/// The largest boost a render at `spp` may use: `max_boost`, or less where it would take a pixel
+/// past [`MAX_PIXEL_SAMPLES`].
+pub fn boost_limit(spp: u32, max_boost: u16) -> u16 {
+    (MAX_PIXEL_SAMPLES / u64::from(spp.max(1))).clamp(1, u64::from(max_boost)) as u16
+}
+
 /// The pilot's samples per pixel for a comparison at `spp`: a quarter, at least 8 (the
 /// estimate's batches).
 pub fn pilot_spp(spp: u32) -> u32 {
@@ -219,6 +228,14 @@ mod tests {
         let y = analysed[0];
         assert_eq!(both[y * w + 100], 64);
         assert_eq!(both[y * w + 300], 64);
+    }
+
+    #[test]
+    fn no_pixel_passes_a_million_samples() {
+        assert_eq!(boost_limit(1024, 64), 64);
+        assert_eq!(boost_limit(65536, 64), 15);
+        assert_eq!(boost_limit(1_000_000, 64), 1);
+        assert_eq!(boost_limit(16, 1), 1);
     }
 
     #[test]

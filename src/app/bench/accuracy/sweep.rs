@@ -131,7 +131,8 @@ pub(super) fn render_reference(
         pc.render.spp = sampling::pilot_spp(spp);
         pc.render.seed = c.render.seed.wrapping_add(sampling::PILOT_SEED);
         let pilot = p.render(&pc, false)?;
-        sampling::boost_map(&[pilot.film], &camera, ROWS, max_boost)
+        let limit = sampling::boost_limit(spp, max_boost);
+        sampling::boost_map(&[pilot.film], &camera, ROWS, limit)
     } else {
         vec![1; camera.width * camera.height]
     };
