@@ -47,8 +47,8 @@ fn compare(spp: u32, seed: u64, max_boost: u16) -> CompareSummary {
 
 /// At 16 and 64 spp, over eight sample seeds, the improvement ratio's 95 % intervals hold the
 /// converged ratio (7 of 8 expected; at least 6 required; 8 of 8 each when written), and at 64
-/// spp with the glint pixels boosted the estimates lie within 10 % of it (7 of 8 when written,
-/// against 1 of 8 rendering every pixel alike). The estimator this replaced (per-row stds
+/// spp with the glint pixels boosted the estimates lie within 10 % of it (7 of 8 when written),
+/// more of them than at 128 spp rendering every pixel alike, which costs about as much (3 of 8). The estimator this replaced (per-row stds
 /// clipped at 0 and averaged, intervals from a bootstrap over azimuth blocks) covered 6 of 12
 /// seeds at 64 and 256 spp on the full-size default scene and drifted with spp
 /// (docs/error-estimator.md).
@@ -63,8 +63,10 @@ fn compare_intervals_hold_the_converged_ratio() {
         "converged {truth:?}"
     );
     let mut report = Vec::new();
-    let mut close_at_64 = Vec::new();
-    for (spp, max_boost) in [(16, 64), (64, 64), (64, 1)] {
+    let mut close_at_cost = Vec::new();
+    // Uniform at 128 spp costs about what 64 spp boosted does (its samples 1.4 to 2 times a
+    // uniform 64's, and the pilots a quarter of the baseline's and of the low scenarios').
+    for (spp, max_boost) in [(16, 64), (64, 64), (128, 1)] {
         let (mut covered, mut close) = (0, 0);
         for seed in 1..=8 {
             let r = compare(spp, seed, max_boost).improvement.corrected;
@@ -83,10 +85,11 @@ fn compare_intervals_hold_the_converged_ratio() {
                 "{close} of 8 within 10 % of {truth:?}:\n{report}"
             );
         }
-        if spp == 64 {
-            close_at_64.push(close);
+        if spp >= 64 {
+            close_at_cost.push(close);
         }
     }
-    // The boost is what brings the estimates close at 64 spp.
-    assert!(close_at_64[0] > close_at_64[1] + 2, "{close_at_64:?}");
+    // At about equal cost, boosting the glint pixels brings the estimates closer than
+    // spreading the samples evenly.
+    assert!(close_at_cost[0] > close_at_cost[1], "{close_at_cost:?}");
 }

@@ -127,6 +127,18 @@ pub fn plan(job: &PlanJob) -> Result<PlanReport, AppError> {
             job.cases
         )));
     }
+    let (spp, k) = (
+        job.base.render.spp,
+        crate::analysis::error::MIN_BATCHES as u32,
+    );
+    if spp < k || !spp.is_multiple_of(k) {
+        return Err(AppError::input(format!(
+            "--spp must be a multiple of {k} (each case's comparison deals its samples into {k} batches; got {spp})"
+        )));
+    }
+    if job.max_boost == 0 {
+        return Err(AppError::input("--max-boost is at least 1"));
+    }
     let plan_path = job.out.join("plan.toml");
     if plan_path.exists() {
         return Err(AppError::input(format!(
@@ -313,17 +325,14 @@ pub struct StudySummary {
     pub scatter_png: PathBuf,
 }
 
+/// Median and quartiles; an infinite ratio counts (as the largest), a NaN does not.
 fn quartiles(v: &[f64]) -> (f64, [f64; 2]) {
-    let mut s: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    let mut s: Vec<f64> = v.iter().copied().filter(|x| !x.is_nan()).collect();
     s.sort_by(f64::total_cmp);
     if s.is_empty() {
         return (f64::NAN, [f64::NAN; 2]);
     }
-    let q = |p: f64| {
-        let x = p * (s.len() - 1) as f64;
-        let (i, f) = (x.floor() as usize, x - x.floor());
-        s[i] * (1.0 - f) + s[(i + 1).min(s.len() - 1)] * f
-    };
+    let q = |p: f64| crate::analysis::error::quantile(&s, p);
     (q(0.5), [q(0.25), q(0.75)])
 }
 
@@ -390,7 +399,10 @@ pub fn summarize(dir: &Path) -> Result<StudySummary, AppError> {
             std_low_unmapped_corrected: f("std_low_unmapped_corrected"),
             std_low_unmapped_ci: scenario("low_unmapped"),
             improvement_ratio: f("improvement_ratio"),
-            improvement_ratio_corrected: f("improvement_ratio_corrected"),
+            // null: the ratio is infinite (low-mapped's difference is below its noise).
+            improvement_ratio_corrected: v["improvement_ratio_corrected"]
+                .as_f64()
+                .unwrap_or(f64::INFINITY),
             improvement_ratio_ci: pair(&v["improvement_ratio_ci"]),
             improvement_significant: v["improvement_significant"].as_bool().unwrap_or(false),
             improvement_ratio_without_glint: v["improvement_ratio_without_glint"]["value"]

@@ -19,7 +19,7 @@ pub enum BenchCommand {
         #[arg(long)]
         out: PathBuf,
         /// Scene file (TOML); without one, the default scene with the sun clipped to radiance
-        /// 100 (see the README). Its camera becomes a panorama.
+        /// 100 (docs/accuracy.md, "Run time against error"). Its camera becomes a panorama.
         #[arg(long)]
         config: Option<PathBuf>,
         /// A reduced sweep (256 px, 4 tessellations, 8 to 128 spp): about a minute on 2 cores.

@@ -55,7 +55,7 @@ pub struct SceneFlags {
     #[arg(long, value_parser = choice::<vastocean::config::Backend>())]
     backend: Option<vastocean::config::Backend>,
     /// What to do when a shading normal would send a ray to the wrong side of its triangle
-    /// (see the README's "How the error is measured").
+    /// (docs/accuracy.md, "The wrong-side policy").
     #[arg(long, value_parser = choice::<vastocean::config::WrongSide>())]
     wrong_side: Option<vastocean::config::WrongSide>,
 }

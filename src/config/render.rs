@@ -18,7 +18,7 @@ super::choice!(NormalMode { Vertex => "vertex", Mapped => "mapped" });
 
 /// What the integrator does when the shading normal disagrees with the triangle it shades:
 /// when it faces away from the incoming ray, or would send the reflected or refracted ray to
-/// the wrong side of the triangle (DESIGN.md, Normal modes; measured in the README).
+/// the wrong side of the triangle (DESIGN.md, Normal modes; measured in docs/accuracy.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum WrongSide {
@@ -30,7 +30,7 @@ pub enum WrongSide {
     /// Bend the shading normal just enough that the reflection leaves above the triangle
     /// (Cycles' ensure_valid_reflection, after Keller et al. 2017); a refraction still on the
     /// wrong side is mirrored. The default: it conserves energy, as production renderers do,
-    /// and gave the most consistent comparison (measured in the README).
+    /// and gave the most consistent comparison (docs/accuracy.md).
     #[default]
     Bend,
     /// End the branch that would leave on the wrong side, and the path at a shading normal

@@ -82,6 +82,36 @@ impl Film {
         }
     }
 
+    /// Per pixel, the variance of its mean luminance from the spread of its batch means:
+    /// sum_b n_b (Y_b - Y)^2 / ((k - 1) n), n_b the batch's samples, n the pixel's. Unlike
+    /// `var_y` (the samples' variance over n, which takes them as independent), it holds for
+    /// samples on a low-discrepancy pattern, whose mean varies less than independent samples'
+    /// would. `None` without batches.
+    pub fn batch_variance_of_mean(&self) -> Option<Vec<f64>> {
+        let b = self.batches.as_ref()?;
+        let k = b.k;
+        let n: f64 = b.spp.iter().map(|&c| c as f64).sum();
+        Some(
+            b.luminance
+                .chunks(k)
+                .map(|y| {
+                    let mean = y
+                        .iter()
+                        .zip(&b.spp)
+                        .map(|(&v, &c)| v as f64 * c as f64)
+                        .sum::<f64>()
+                        / n;
+                    let ss: f64 = y
+                        .iter()
+                        .zip(&b.spp)
+                        .map(|(&v, &c)| c as f64 * (v as f64 - mean).powi(2))
+                        .sum();
+                    ss / ((k - 1) as f64 * n)
+                })
+                .collect(),
+        )
+    }
+
     /// RMS over the image of the standard error of the pixel luminance, or `None` with fewer
     /// than two samples per pixel.
     pub fn noise_rms(&self) -> Option<f64> {
@@ -545,6 +575,35 @@ mod tests {
             q
         };
         assert_eq!(one.var_of_mean(), 0.0);
+    }
+
+    #[test]
+    fn variance_of_the_mean_from_batches() {
+        // Two pixels, four batches of two samples: the spread of the batch means over k - 1,
+        // over k (the mean of k equal batches).
+        let means = [1.0f32, 2.0, 3.0, 6.0, 5.0, 5.0, 5.0, 5.0];
+        let film = Film {
+            image: RgbImage::new(2, 1),
+            var_y: vec![0.0; 2],
+            spp: 8,
+            batches: Some(Batches {
+                k: 4,
+                spp: vec![2; 4],
+                luminance: means.to_vec(),
+            }),
+        };
+        let v = film.batch_variance_of_mean().unwrap();
+        // Batch means 1, 2, 3, 6: mean 3, squares 4 + 1 + 0 + 9 = 14; 14 / 3 / 4.
+        assert!((v[0] - 14.0 / 12.0).abs() < 1e-12, "{v:?}");
+        assert_eq!(v[1], 0.0);
+        assert!(
+            Film {
+                batches: None,
+                ..film
+            }
+            .batch_variance_of_mean()
+            .is_none()
+        );
     }
 
     #[test]

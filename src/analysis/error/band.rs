@@ -20,14 +20,19 @@ pub(super) struct RowValue {
 }
 
 impl RowValue {
+    /// The trend is a circular moving average of each batch's difference, so its row mean is
+    /// the difference's exactly and the residual's is exactly 0: the square of the row mean is
+    /// estimated once, from the difference (whose pixels' noises are independent; the trend's
+    /// are not), and the residual needs none.
     pub fn new(d: &RowSums, trend: &RowSums, residual: &RowSums) -> RowValue {
+        let mean_square = d.signal() - d.p / d.n;
         RowValue {
             mean: d.mean(),
             plain: d.plain(),
             noise: d.noise().max(0.0),
             signal: d.signal(),
-            trend: trend.signal(),
-            residual: residual.signal(),
+            trend: trend.p / trend.n + mean_square,
+            residual: residual.p / residual.n,
         }
     }
 }
@@ -113,8 +118,11 @@ pub(super) fn glint_rows(rows: &[RowValue]) -> Vec<bool> {
     let (q1, q3) = (quantile(&s, 0.25), quantile(&s, 0.75));
     let fence = q3 + 3.0 * (q3 - q1);
     let quiet = quantile(&sorted(|r| r.noise.sqrt()), 0.25);
+    // With a noiseless quarter of the rows there is no quiet noise to compare with.
     rows.iter()
-        .map(|r| r.plain.sqrt() > fence || r.noise.sqrt() > GLINT_NOISE_FACTOR * quiet)
+        .map(|r| {
+            r.plain.sqrt() > fence || (quiet > 0.0 && r.noise.sqrt() > GLINT_NOISE_FACTOR * quiet)
+        })
         .collect()
 }
 

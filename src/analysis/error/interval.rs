@@ -77,7 +77,7 @@ impl Interval {
     /// percentiles are moved by how far the replicates' median sits from the estimate (a
     /// ratio, or a square root of a variance, is skewed at low sample counts). `inflate`
     /// scales each replicate's distance from the estimate first (see
-    /// [`super::bootstrap::INFLATE`]). NaN replicates are dropped; infinite ones are kept.
+    /// `super::bootstrap::inflation`). NaN replicates are dropped; infinite ones are kept.
     pub fn new(value: f64, replicates: impl IntoIterator<Item = f64>, inflate: f64) -> Interval {
         let mut reps: Vec<f64> = replicates
             .into_iter()

@@ -52,9 +52,9 @@ use crate::render::film::Film;
 use band::{BandValue, RowValue, glint_rows};
 pub use band::{GLINT_NOISE_FACTOR, TRIM};
 pub use bootstrap::REPLICATES;
-pub(crate) use interval::median;
 use interval::root;
 pub use interval::{CONFIDENCE, Interval};
+pub(crate) use interval::{median, quantile};
 use moments::{Field, K, RowSums};
 
 /// Azimuthal length of a bootstrap block, degrees.

@@ -278,6 +278,78 @@ pub(super) fn table(inp: &Inputs) -> Result<Table, EstimateError> {
 mod tests {
     use super::*;
 
+    /// Unequal batch weights (sample counts 1, 2, 3, 4): the unbiased pieces against their
+    /// direct formulas, and the film's own noise as the batches' spread says it.
+    #[test]
+    fn row_sums_with_unequal_weights() {
+        let k = 4;
+        let w = [1.0, 2.0, 3.0, 4.0, 0.0, 0.0, 0.0, 0.0];
+        let ones = [1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0];
+        let px: Vec<[f64; K]> = (0..5)
+            .map(|i| {
+                std::array::from_fn(|b| {
+                    if b < k {
+                        ((i * 3 + b * 5) % 7) as f64 * 0.1
+                    } else {
+                        0.0
+                    }
+                })
+            })
+            .collect();
+        let mut g = Gram::default();
+        px.iter().for_each(|d| g.add(d, k));
+        g.symmetrise(k);
+        let mut r = RowSums::default();
+        r.add(&g, 5.0, &ones, &w, k, 1.0);
+        let wsum: f64 = w.iter().sum();
+        let pairs = wsum * wsum - w.iter().map(|x| x * x).sum::<f64>();
+        let (mut sp, mut sv) = (0.0, 0.0);
+        for d in &px {
+            let a: f64 = (0..k).map(|b| w[b] * d[b]).sum::<f64>() / wsum;
+            let mut p = 0.0;
+            for b in 0..k {
+                for j in 0..k {
+                    if b != j {
+                        p += w[b] * w[j] * d[b] * d[j];
+                    }
+                }
+            }
+            sp += p / pairs;
+            // Batch means of variance s^2 / w_b: s^2 from the weighted spread over k - 1, the
+            // mean's variance s^2 / sum w; the unbiased (A^2 - P) form of it, rescaled.
+            sv += (a * a - p / pairs) * wsum * wsum / (w.iter().sum::<f64>() * wsum);
+        }
+        assert!((r.p - sp).abs() < 1e-12);
+        assert!((r.v - sv).abs() < 1e-12);
+        // Batch means of variance s^2 / w_b (s = 1): whatever the draw, `v` estimates the
+        // film's noise 1 / sum w, here 0.1, without bias.
+        let mut rng = crate::rng::Rng::keyed(&[42]);
+        let mut gauss = || {
+            let (u1, u2) = (rng.f64().max(1e-300), rng.f64());
+            (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+        };
+        let mut g = Gram::default();
+        let n = 40_000;
+        for _ in 0..n {
+            let d: [f64; K] = std::array::from_fn(|b| {
+                if b < k {
+                    0.3 + gauss() / w[b].sqrt()
+                } else {
+                    0.0
+                }
+            });
+            g.add(&d, k);
+        }
+        g.symmetrise(k);
+        for c in [ones, [2.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0]] {
+            let mut r = RowSums::default();
+            r.add(&g, n as f64, &c, &w, k, 1.0);
+            assert!((r.noise() / 0.1 - 1.0).abs() < 0.03, "{c:?}: {}", r.noise());
+            // No difference over the row but noise: the signal is 0 within its noise.
+            assert!(r.signal().abs() < 0.005, "{c:?}: {}", r.signal());
+        }
+    }
+
     #[test]
     fn moving_average_is_circular_and_keeps_the_mean() {
         let v: Vec<f64> = (0..10).map(|i| i as f64).collect();

@@ -187,9 +187,9 @@ fn check(job: &CompareJob) -> Result<(), AppError> {
         crate::lod::params_for(&scene.lod, &scene.camera)?;
     }
     let spp = job.scene.render.spp;
-    if (spp as usize) < MIN_BATCHES {
+    if (spp as usize) < MIN_BATCHES || !(spp as usize).is_multiple_of(MIN_BATCHES) {
         return Err(AppError::input(format!(
-            "compare needs at least {MIN_BATCHES} samples per pixel (--spp), one in each of the {MIN_BATCHES} independent batches its error estimate reads (got {spp})"
+            "compare needs a multiple of {MIN_BATCHES} samples per pixel (--spp), as many in each of the {MIN_BATCHES} independent batches its error estimate reads (got {spp})"
         )));
     }
     if job.max_boost == 0 {
@@ -223,21 +223,22 @@ fn check(job: &CompareJob) -> Result<(), AppError> {
 /// not to warn.
 pub const BASELINE_NOISE_SHARE: f64 = 0.25;
 
-/// RMS over the analysed rows of the standard error of the film's pixel luminance.
+/// RMS over the analysed rows of the standard error of the film's pixel luminance (from its
+/// batches).
 fn band_noise(
     film: &crate::render::film::Film,
     camera: &crate::render::Camera,
     rows: (f64, f64),
 ) -> f64 {
     let w = film.image.width;
+    let var = film
+        .batch_variance_of_mean()
+        .unwrap_or_else(|| film.var_y.iter().map(|&v| v as f64).collect());
     let (mut sum, mut n) = (0.0, 0.0);
     for y in 0..film.image.height {
         let e = camera.row_elevation_deg(y);
         if e <= rows.0 && e >= rows.1 {
-            sum += film.var_y[y * w..(y + 1) * w]
-                .iter()
-                .map(|&v| v as f64)
-                .sum::<f64>();
+            sum += var[y * w..(y + 1) * w].iter().sum::<f64>();
             n += w as f64;
         }
     }

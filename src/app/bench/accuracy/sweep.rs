@@ -77,22 +77,20 @@ pub(super) fn render_points(
     Ok(out)
 }
 
-/// Per analysed row, the mean over its pixels of the variance of the pixel mean; and that
-/// averaged over the rows.
+/// Per analysed row, the mean over its pixels of the variance of the pixel mean (from the
+/// batches: the samples of a pixel are not independent, see `Film::batch_variance_of_mean`);
+/// and that averaged over the rows.
 pub(super) fn band_noise(film: &Film, band: &Camera) -> (Vec<f64>, f64) {
     let w = film.image.width;
+    let var = film
+        .batch_variance_of_mean()
+        .unwrap_or_else(|| film.var_y.iter().map(|&v| v as f64).collect());
     let rows: Vec<f64> = (0..film.image.height)
         .filter(|&y| {
             let e = band.row_elevation_deg(y);
             e <= ROWS.0 && e >= ROWS.1
         })
-        .map(|y| {
-            film.var_y[y * w..(y + 1) * w]
-                .iter()
-                .map(|&v| v as f64)
-                .sum::<f64>()
-                / w as f64
-        })
+        .map(|y| var[y * w..(y + 1) * w].iter().sum::<f64>() / w as f64)
         .collect();
     let mean = rows.iter().sum::<f64>() / rows.len().max(1) as f64;
     (rows, mean)
