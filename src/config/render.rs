@@ -29,8 +29,8 @@ pub enum WrongSide {
     Flip,
     /// Bend the shading normal just enough that the reflection leaves above the triangle
     /// (Cycles' ensure_valid_reflection, after Keller et al. 2017); a refraction still on the
-    /// wrong side is mirrored. The default: it conserves energy, as production renderers do,
-    /// and gave the most consistent comparison (docs/accuracy.md).
+    /// wrong side is mirrored. The default because it conserves energy and sends no reflection
+    /// to the wrong side, as production renderers do; not for its ratio (docs/accuracy.md).
     #[default]
     Bend,
     /// End the branch that would leave on the wrong side, and the path at a shading normal

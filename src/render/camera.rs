@@ -51,6 +51,17 @@ impl Camera {
         }
     }
 
+    /// The image rows whose centres lie between the elevations `rows_deg.0` (top) and
+    /// `rows_deg.1` (bottom), both included: the rows an analysis reads.
+    pub fn rows_between(&self, rows_deg: (f64, f64)) -> Vec<usize> {
+        (0..self.height)
+            .filter(|&y| {
+                let e = self.row_elevation_deg(y);
+                e <= rows_deg.0 && e >= rows_deg.1
+            })
+            .collect()
+    }
+
     /// The full-sphere row of image row 0 (0 without a band).
     pub fn first_row(&self) -> usize {
         self.row0

@@ -112,6 +112,18 @@ impl Film {
         )
     }
 
+    /// For each of `rows`, the mean over its pixels of the variance of the pixel mean (from the
+    /// batches when the film has them, [`Film::batch_variance_of_mean`], else `var_y`).
+    pub fn row_noise(&self, rows: &[usize]) -> Vec<f64> {
+        let w = self.image.width;
+        let var = self
+            .batch_variance_of_mean()
+            .unwrap_or_else(|| self.var_y.iter().map(|&v| v as f64).collect());
+        rows.iter()
+            .map(|&y| var[y * w..(y + 1) * w].iter().sum::<f64>() / w as f64)
+            .collect()
+    }
+
     /// RMS over the image of the standard error of the pixel luminance, or `None` with fewer
     /// than two samples per pixel.
     pub fn noise_rms(&self) -> Option<f64> {

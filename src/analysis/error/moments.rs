@@ -210,12 +210,7 @@ pub(super) fn table(inp: &Inputs) -> Result<Table, EstimateError> {
     }
     let (top, bottom) = inp.rows_deg;
     let w = base.image.width;
-    let rows: Vec<usize> = (0..base.image.height)
-        .filter(|&y| {
-            let e = inp.camera.row_elevation_deg(y);
-            e <= top && e >= bottom
-        })
-        .collect();
+    let rows = inp.camera.rows_between((top, bottom));
     if rows.is_empty() {
         return Err(EstimateError::NoRows(top, bottom));
     }

@@ -223,28 +223,6 @@ fn check(job: &CompareJob) -> Result<(), AppError> {
 /// not to warn.
 pub const BASELINE_NOISE_SHARE: f64 = 0.25;
 
-/// RMS over the analysed rows of the standard error of the film's pixel luminance (from its
-/// batches).
-fn band_noise(
-    film: &crate::render::film::Film,
-    camera: &crate::render::Camera,
-    rows: (f64, f64),
-) -> f64 {
-    let w = film.image.width;
-    let var = film
-        .batch_variance_of_mean()
-        .unwrap_or_else(|| film.var_y.iter().map(|&v| v as f64).collect());
-    let (mut sum, mut n) = (0.0, 0.0);
-    for y in 0..film.image.height {
-        let e = camera.row_elevation_deg(y);
-        if e <= rows.0 && e >= rows.1 {
-            sum += var[y * w..(y + 1) * w].iter().sum::<f64>();
-            n += w as f64;
-        }
-    }
-    (sum / n.max(1.0)).sqrt()
-}
-
 /// Renders every scenario, each tessellation prepared once, after the pilot that places the
 /// samples; returned in [`Scenario::ALL`] order, with how the samples were spent.
 fn render_scenarios(
@@ -408,7 +386,10 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
     plot::contact_sheet(&sheet_png, &images, &labels, exposure).map_err(plot_error(&sheet_png))?;
 
     let e = &estimates.scenarios;
-    let baseline_noise = band_noise(&runs[0].1.film, &runs[0].1.camera, job.rows_deg);
+    // RMS over the analysed rows of the standard error of the baseline's pixel luminance.
+    let rows = runs[0].1.camera.rows_between(job.rows_deg);
+    let row_noise = runs[0].1.film.row_noise(&rows);
+    let baseline_noise = (row_noise.iter().sum::<f64>() / row_noise.len().max(1) as f64).sqrt();
     let smallest = e[..3]
         .iter()
         .map(|s| s.std_corrected.value)

@@ -72,12 +72,7 @@ pub fn boost_map(
 ) -> Vec<u16> {
     let (w, h) = (camera.width, camera.height);
     let mut boost = vec![1u16; w * h];
-    let rows: Vec<usize> = (0..h)
-        .filter(|&y| {
-            let e = camera.row_elevation_deg(y);
-            e <= rows_deg.0 && e >= rows_deg.1
-        })
-        .collect();
+    let rows = camera.rows_between(rows_deg);
     if max_boost <= 1 || rows.is_empty() || pilots.is_empty() {
         return boost;
     }
@@ -153,11 +148,9 @@ pub fn report(
     seconds_pilot: f64,
 ) -> SamplingReport {
     let w = camera.width;
-    let analysed: Vec<u16> = (0..camera.height)
-        .filter(|&y| {
-            let e = camera.row_elevation_deg(y);
-            e <= rows_deg.0 && e >= rows_deg.1
-        })
+    let analysed: Vec<u16> = camera
+        .rows_between(rows_deg)
+        .into_iter()
         .flat_map(|y| boost[y * w..(y + 1) * w].iter().copied())
         .collect();
     let total: f64 = boost.iter().map(|&b| b as f64).sum();

@@ -81,17 +81,7 @@ pub(super) fn render_points(
 /// batches: the samples of a pixel are not independent, see `Film::batch_variance_of_mean`);
 /// and that averaged over the rows.
 pub(super) fn band_noise(film: &Film, band: &Camera) -> (Vec<f64>, f64) {
-    let w = film.image.width;
-    let var = film
-        .batch_variance_of_mean()
-        .unwrap_or_else(|| film.var_y.iter().map(|&v| v as f64).collect());
-    let rows: Vec<f64> = (0..film.image.height)
-        .filter(|&y| {
-            let e = band.row_elevation_deg(y);
-            e <= ROWS.0 && e >= ROWS.1
-        })
-        .map(|y| var[y * w..(y + 1) * w].iter().sum::<f64>() / w as f64)
-        .collect();
+    let rows = film.row_noise(&band.rows_between(ROWS));
     let mean = rows.iter().sum::<f64>() / rows.len().max(1) as f64;
     (rows, mean)
 }
@@ -99,18 +89,13 @@ pub(super) fn band_noise(film: &Film, band: &Camera) -> (Vec<f64>, f64) {
 /// Mean luminance over the analysed rows.
 pub(super) fn band_luminance(film: &Film, band: &Camera) -> f64 {
     let w = film.image.width;
-    let (mut s, mut n) = (0.0, 0.0);
-    for y in 0..film.image.height {
-        let e = band.row_elevation_deg(y);
-        if e <= ROWS.0 && e >= ROWS.1 {
-            s += film.image.pixels[y * w..(y + 1) * w]
-                .iter()
-                .map(|&c| luminance(c) as f64)
-                .sum::<f64>();
-            n += w as f64;
-        }
-    }
-    s / n.max(1.0)
+    let rows = band.rows_between(ROWS);
+    let sum: f64 = rows
+        .iter()
+        .flat_map(|&y| &film.image.pixels[y * w..(y + 1) * w])
+        .map(|&c| luminance(c) as f64)
+        .sum();
+    sum / (rows.len() * w).max(1) as f64
 }
 
 /// The reference at `spp`: a pilot, then the analysed rows with the noisiest pixels boosted.
