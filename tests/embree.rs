@@ -171,9 +171,40 @@ fn batch_of_random_rays_agrees_with_brute_force_hit_for_hit() {
         "{ambiguous} near-edge ties out of 100k is more than f32 rounding explains"
     );
 
-    // The single-ray path gives the very same answers as the packet path.
+    // The single-ray path gives the very same answers as the batch path.
     for (r, h) in rays.iter().zip(&hits).step_by(97) {
         assert_eq!(scene.intersect(r), *h);
+    }
+}
+
+/// A ray's hit must not depend on the batch it travels in, with whichever of Embree's kernels
+/// the CPU runs: on AVX2, Embree's 16-wide packets rounded differently from its single rays
+/// (41 k of these 100 k rays, in the last bits of t, u or v), so a render split into passes
+/// stopped merging bit for bit into the single render there.
+#[test]
+fn batches_answer_as_single_rays_with_every_kernel_set() {
+    let mesh = Arc::new(random_mesh(10_000, 0.08, 1));
+    let rays = random_rays(100_000, 2);
+    for isa in ["sse2", "sse4.2", "avx", "avx2", ""] {
+        let config = if isa.is_empty() {
+            String::new()
+        } else {
+            format!("max_isa={isa}")
+        };
+        let device = Device::with_config(2, &config).expect("Embree device");
+        let scene = Scene::new(&device, mesh.clone(), BuildOptions::default()).unwrap();
+        let mut hits = vec![None; rays.len()];
+        scene.intersect_many(&rays, &mut hits);
+        let differ = rays
+            .iter()
+            .zip(&hits)
+            .filter(|(r, h)| scene.intersect(r) != **h)
+            .count();
+        assert_eq!(
+            differ, 0,
+            "{differ} rays answered otherwise alone, {config:?}"
+        );
+        assert!(hits.iter().filter(|h| h.is_some()).count() > 30_000);
     }
 }
 
@@ -278,14 +309,16 @@ fn a_refit_scene_follows_its_moved_vertices() {
     assert!(matches!(scene.refit(&up), Err(EmbreeError::Shared)));
     drop(shared);
     let ray = Ray::new([5.5, 5.0, 7.25], [0.0, -1.0, 0.0]);
-    assert_eq!(scene.intersect(&ray).map(|h| h.t), Some(5.0));
+    // Within an f32 step or two: Embree's AVX2 kernel gives 4.9999995 for the exact 5.
+    let t = |scene: &Scene| scene.intersect(&ray).map(|h| h.t).expect("hit");
+    assert!((t(&scene) - 5.0).abs() < 1e-5, "{}", t(&scene));
     scene.refit(&up).unwrap();
-    assert_eq!(scene.intersect(&ray).map(|h| h.t), Some(4.0));
+    assert!((t(&scene) - 4.0).abs() < 1e-5, "{}", t(&scene));
     assert_eq!(scene.mesh().positions()[7], up[7]);
     // Invalid positions change nothing.
     let mut bad = up.clone();
     bad[3][1] = f32::NAN;
     assert!(scene.refit(&bad).is_err());
-    assert_eq!(scene.intersect(&ray).map(|h| h.t), Some(4.0));
+    assert!((t(&scene) - 4.0).abs() < 1e-5, "{}", t(&scene));
     assert!(scene.bytes() > 0, "the memory monitor saw the build");
 }

@@ -103,7 +103,9 @@ void vo_scene_bounds(void *scene, float lower[3], float upper[3]);
 
 /* Queries; the scene must be committed. Safe to call from many threads at once. */
 void vo_intersect1(void *scene, const vo_ray *ray, vo_hit *hit);
-/* Traces n rays in packets of 16 (rtcIntersect16 on both Embree 3 and 4). */
+/* Traces n rays one by one (rtcIntersect1), each exactly as vo_intersect1 would: Embree's
+ * packet kernels round differently from its single-ray kernel on some CPUs (AVX2), which made
+ * a ray's hit depend on the batch it travelled in. */
 void vo_intersect_batch(void *scene, const vo_ray *rays, vo_hit *hits, size_t n);
 /* 1 when anything lies on the ray within [tnear, tfar], else 0. */
 int vo_occluded1(void *scene, const vo_ray *ray);

@@ -158,7 +158,18 @@ unsafe impl Sync for Device {}
 impl Device {
     /// Creates a device that uses `threads` threads for BVH builds (0 = all cores).
     pub fn new(threads: usize) -> Result<Arc<Device>, EmbreeError> {
-        let config = device_config(threads);
+        Device::with_config(threads, "")
+    }
+
+    /// As [`Device::new`], with more of Embree's device settings (`rtcNewDevice`'s config
+    /// string, e.g. `"max_isa=avx2"` to use no kernels past AVX2, as on a machine without
+    /// AVX-512). Embree ignores settings it does not know.
+    pub fn with_config(threads: usize, extra: &str) -> Result<Arc<Device>, EmbreeError> {
+        let config = match (device_config(threads), extra) {
+            (c, "") => c,
+            (c, e) if c.is_empty() => e.to_string(),
+            (c, e) => format!("{c},{e}"),
+        };
         let sink = NonNull::from(Box::leak(Box::<ErrorSink>::default()));
         let c = CString::new(config.clone()).expect("config has no NUL");
         // SAFETY: the callback and its user pointer (the sink) outlive the device (freed in Drop

@@ -74,7 +74,7 @@ pub trait Accel: Send + Sync {
     /// Closest hit of `ray`, if any.
     fn intersect(&self, ray: &Ray) -> Option<Hit>;
     /// Closest hits of many rays; `hits.len()` must equal `rays.len()`. The default traces
-    /// them one by one; a backend with a batch path (Embree's packets) overrides it, and must
+    /// them one by one; a backend with a batch path (Embree's: one foreign call) overrides it, and must
     /// return exactly what [`Accel::intersect`] returns for each ray: the integrator's images
     /// must not depend on how its rays were batched (tested on every backend).
     fn intersect_many(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {

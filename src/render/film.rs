@@ -403,8 +403,7 @@ pub fn render_image_samples(
                         None
                     };
                     // The pixel's samples go to the integrator CAMERA_BATCH at a time, so that
-                    // the camera rays the BVH must trace are traced together (one Embree
-                    // packet).
+                    // their paths go through each stage together.
                     let mut sample_ids = (samples.pass as u32..pixel_spp).step_by(samples.passes);
                     loop {
                         let mut ids = [0u32; CAMERA_BATCH];

@@ -374,15 +374,10 @@ pub fn hit_on_triangle(ray: &Ray, tri: [Vec3; 3], prim: u32) -> Option<Hit> {
     (inside && t >= ray.tnear && t <= ray.tfar && t.is_finite()).then_some(Hit { t, prim, u, v })
 }
 
-/// Most camera rays [`SceneRef::radiance_camera_batch`] takes at once: one Embree packet for
-/// those the BVH must trace. It
-/// bounds every batch of [`SceneRef::radiance_batch`] (a batch holds a sample at most once).
+/// Most camera rays [`SceneRef::radiance_camera_batch`] takes at once (one pixel's samples go
+/// to the BVH together). It bounds every batch of [`SceneRef::radiance_batch`] (a batch holds a
+/// sample at most once).
 pub const CAMERA_BATCH: usize = 16;
-/// Fewer rays than this are traced one by one: a packet of 16 lanes carrying one camera ray was
-/// 12 % slower than single rays (default scene at 1 spp), carrying four 9 % faster. The same
-/// threshold serves the batches of secondary rays, which are less coherent; on the default
-/// scene few of them need the BVH at all (most are answered by the skips).
-const PACKET_MIN: usize = 2;
 
 /// What the integrator traces against.
 pub struct SceneRef<'a> {
@@ -730,8 +725,8 @@ impl SceneRef<'_> {
     /// (`rngs[entry.sample]` is its generator), into `out`: the path tracer itself, a stage at a
     /// time over the whole batch, each ray's result bit for bit what it gets in a batch of one.
     ///
-    /// The rays the BVH must see are traced together (Embree: one packet; one pixel's camera
-    /// rays are all but parallel), every hit is shaded, and the rays leaving the hits form two
+    /// The rays the BVH must see are traced together (one call into the backend), every hit is
+    /// shaded, and the rays leaving the hits form two
     /// batches of their own: the first branch of every hit (its reflection, or the branch chosen
     /// past `branch_depth`), then the second (its refraction, while both are followed). One
     /// sample's path is a chain of dependent long-latency steps (square roots, divisions, texel
@@ -787,7 +782,7 @@ impl SceneRef<'_> {
         }
         let mut hits = [None; CAMERA_BATCH];
         match predicted {
-            None => self.intersect_batch(&traced[..m], &mut hits[..m]),
+            None => self.accel.intersect_many(&traced[..m], &mut hits[..m]),
             Some(prim) => {
                 // Rays that meet the predicted triangle steeply enough have their hit; the
                 // rest go to the BVH together.
@@ -814,7 +809,7 @@ impl SceneRef<'_> {
                     }
                 }
                 let mut rest_hits = [None; CAMERA_BATCH];
-                self.intersect_batch(&rest[..r], &mut rest_hits[..r]);
+                self.accel.intersect_many(&rest[..r], &mut rest_hits[..r]);
                 for (&i, h) in rest_of[..r].iter().zip(rest_hits) {
                     hits[i as usize] = h;
                 }
@@ -892,17 +887,6 @@ impl SceneRef<'_> {
                 l_first[j]
             };
             out[*k as usize] = s.attenuation * l;
-        }
-    }
-
-    /// Closest hits of a batch of rays: one packet, or one by one when it would hold too few.
-    fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
-        if rays.len() >= PACKET_MIN {
-            self.accel.intersect_many(rays, hits);
-        } else {
-            for (h, r) in hits.iter_mut().zip(rays) {
-                *h = self.accel.intersect(r);
-            }
         }
     }
 
