@@ -59,6 +59,12 @@ impl Rng {
         lo + (hi - lo) * self.f32()
     }
 
+    /// A standard normal deviate (Box-Muller).
+    pub fn gauss(&mut self) -> f64 {
+        let (u1, u2) = (self.f64().max(1e-300), self.f64());
+        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    }
+
     /// A direction uniformly distributed on the unit sphere.
     pub fn unit_vector(&mut self) -> [f32; 3] {
         let z = 1.0 - 2.0 * self.f32();

@@ -99,6 +99,10 @@ pub fn run(cli: Cli) -> Result<()> {
             None => emit(&app::render::run(&a.job()?)?, a.json),
         },
         Command::Merge(a) => emit(&app::passes::Merged(app::passes::merge(&a.job())?), a.json),
+        Command::Compare(a) if a.realizations > 1 => emit(
+            &app::compare::realizations::run(&a.job()?, a.realizations.into())?,
+            a.json,
+        ),
         Command::Compare(a) => emit(&app::compare::run(&a.job()?)?, a.json),
         #[cfg(feature = "embree")]
         Command::Crosscheck(a) => embree::crosscheck(a),

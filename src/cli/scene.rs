@@ -210,6 +210,11 @@ pub struct CompareArgs {
     /// the samples, the extra at most doubling the work. 1 renders every pixel alike.
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u16).range(1..=1024))]
     max_boost: u16,
+    /// Ocean realizations: with N > 1 the comparison runs for ocean seeds render.ocean_seed,
+    /// +1, ... +N-1 (each in OUT/ocean-seed-S), and OUT/summary.json pools them: the sea
+    /// state's improvement ratio with an interval that holds the spread between seas too.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=64))]
+    pub realizations: u16,
     /// Output folder.
     #[arg(long)]
     out: PathBuf,

@@ -41,6 +41,7 @@ mod band;
 mod bootstrap;
 mod interval;
 mod moments;
+pub mod realizations;
 #[cfg(test)]
 mod tests;
 

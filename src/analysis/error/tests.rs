@@ -10,11 +10,6 @@ use crate::rng::Rng;
 
 const NB: usize = 8;
 
-fn gauss(r: &mut Rng) -> f64 {
-    let (u1, u2) = (r.f64().max(1e-300), r.f64());
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-}
-
 /// A film from per-pixel batch means (`batches[pixel][b]`), `per_batch` samples each.
 fn film_of(batches: &[[f64; NB]], w: usize, h: usize, per_batch: u32) -> Film {
     let full: Vec<f32> = batches
@@ -93,11 +88,11 @@ fn synthetic(
     let mut scen = vec![[0.0; NB]; w * h];
     let mut mu = vec![0.0; w * h];
     for i in 0..w * h {
-        mu[i] = sigma_true * gauss(&mut r);
+        mu[i] = sigma_true * r.gauss();
         for k in 0..NB {
-            let shared = 1.0 + noise * gauss(&mut r);
+            let shared = 1.0 + noise * r.gauss();
             base[i][k] = shared;
-            scen[i][k] = shared + mu[i] + own * gauss(&mut r);
+            scen[i][k] = shared + mu[i] + own * r.gauss();
         }
     }
     let truth = truth_of(&mu, &cam);

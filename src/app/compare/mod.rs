@@ -438,6 +438,7 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
     Ok(summary)
 }
 
+pub mod realizations;
 mod report;
 pub mod sampling;
 pub use report::NOISE_CHECK_RANGE;
