@@ -117,6 +117,25 @@ impl fmt::Display for OceanReport {
             "  realization RMS   {:.4} m (sampled surface {:.4} m)",
             s.realization_rms_m, s.sampled_rms_m
         )?;
+        writeln!(
+            f,
+            "  mean square slope {:.5} spectrum, {:.5} grid points, {:.5} as read ({:?}: {:+.1} % of the spectrum's)",
+            s.mss_spectrum,
+            s.mss_grid,
+            s.mss_lookup,
+            p.interp,
+            100.0 * (s.mss_lookup / s.mss_spectrum - 1.0)
+        )?;
+        for (i, l) in s.layers.iter().enumerate() {
+            writeln!(
+                f,
+                "    layer {i}: {:.5} spectrum, {:.5} grid points, {:.5} as read ({:+.1} %)",
+                l.mss_spectrum,
+                l.mss_grid,
+                l.mss_lookup,
+                100.0 * (l.mss_lookup / l.mss_spectrum - 1.0)
+            )?;
+        }
         writeln!(f, "  Hs                {:.3} m", s.hs_m)?;
         writeln!(f, "  peak wavelength   {:.2} m", s.peak_wavelength_m)?;
         writeln!(f, "  folded fraction   {:.5}", s.folded_fraction)?;

@@ -35,6 +35,10 @@ pub struct OceanArgs {
     /// pure height field.
     #[arg(long, default_value_t = OceanParams::default().choppiness)]
     choppiness: f64,
+    /// How the surface is read between grid points (what the mapped normals and the reported
+    /// "as read" slopes use).
+    #[arg(long, value_parser = super::choice::<vastocean::ocean::Interp>(), default_value_t = OceanParams::default().interp)]
+    interp: vastocean::ocean::Interp,
     /// Time t of paper eq. 2, s.
     #[arg(long, default_value_t = 0.0)]
     time: f64,
@@ -108,6 +112,7 @@ impl OceanArgs {
                 layers: self.layers.clone().map_or(defaults.layers.clone(), |l| l.0),
                 layering: self.layering,
                 spreading_cap: self.spreading_cap,
+                interp: self.interp,
                 ..defaults
             },
             seed: self.seed,

@@ -35,8 +35,26 @@ pub struct Surface {
     seed: u64,
     amplitude_scale: f64,
     seconds: f64,
+    stats: Stats,
+}
+
+/// What [`Surface::update_stats`] measures of the surface at its time.
+#[derive(Clone, Debug, Default)]
+struct Stats {
     folded_fraction: f64,
     sampled_rms_m: f64,
+    /// Mean square slope |grad h|^2 of the summed surface as sampled (jittered grid, the
+    /// surface's interpolation).
+    sampled_mss: f64,
+    /// Per layer: over its grid points (the exact spectral gradients), and as read between
+    /// them at the jittered points.
+    grid_mss: Vec<f64>,
+    lookup_mss: Vec<f64>,
+}
+
+/// |grad h|^2 of a texel (or of summed fields).
+fn slope2(t: &Texel) -> f64 {
+    (t[field::DH_DX] as f64).powi(2) + (t[field::DH_DZ] as f64).powi(2)
 }
 
 /// The surface at one nominal position.
@@ -196,6 +214,12 @@ pub struct LayerSummary {
     /// sqrt of the integral of the layer's share of the (scaled) spectrum, m.
     pub spectrum_rms_m: f64,
     pub realization_rms_m: f64,
+    /// Mean square slope |grad h|^2: the integral of k^2 over the layer's share of the
+    /// (scaled) spectrum; over the grid points (the realization's exact gradients); and as the
+    /// renderer reads it between them (the surface's interpolation, at random points).
+    pub mss_spectrum: f64,
+    pub mss_grid: f64,
+    pub mss_lookup: f64,
     /// Where this layer alone folds.
     pub folded_fraction: f64,
 }
@@ -218,6 +242,12 @@ pub struct OceanSummary {
     pub realization_rms_m: f64,
     /// RMS of the summed, interpolated surface on a jittered grid over the coarsest period.
     pub sampled_rms_m: f64,
+    /// Mean square slope |grad h|^2 of the whole surface: the layers' spectrum and grid figures
+    /// summed, and the summed surface as the renderer reads it (same jittered grid); the
+    /// mapped normals carry the lookup's.
+    pub mss_spectrum: f64,
+    pub mss_grid: f64,
+    pub mss_lookup: f64,
     /// Significant wave height 4 x realization RMS, m.
     pub hs_m: f64,
     /// Factor applied to the amplitudes to reach `rms_m` (1 without a target).
@@ -278,8 +308,7 @@ impl Surface {
             seed,
             amplitude_scale,
             seconds: 0.0,
-            folded_fraction: 0.0,
-            sampled_rms_m: 0.0,
+            stats: Stats::default(),
         };
         surface.update_stats();
         surface.seconds = start.elapsed().as_secs_f64();
@@ -300,8 +329,7 @@ impl Surface {
             seed: 0,
             amplitude_scale: 0.0,
             seconds: 0.0,
-            folded_fraction: 0.0,
-            sampled_rms_m: 0.0,
+            stats: Stats::default(),
         }
     }
 
@@ -356,36 +384,64 @@ impl Surface {
         self.spectrum.as_ref()
     }
 
-    /// Folded fraction and RMS of the summed surface on a jittered STATS_GRID^2 grid over the
-    /// coarsest layer's period; rows are summed in order so the result is thread-count free.
+    /// Folded fraction, RMS and mean square slope of the summed surface on a jittered
+    /// STATS_GRID^2 grid over the coarsest layer's period, each layer's mean square slope as read
+    /// there and over its grid points; rows are summed in order so the result is thread-count
+    /// free.
     fn update_stats(&mut self) {
         let Some(l0) = self.layers.first() else {
             return;
         };
         let size = l0.size_m();
-        let sampler = self.sampler([0.0, 0.0]);
-        let m = STATS_GRID;
-        let rows: Vec<(usize, f64)> = (0..m)
+        let (layers, interp, m) = (&self.layers, self.params.interp, STATS_GRID);
+        // Per row: folded points, sum of h^2, of |grad h|^2, and of each layer's |grad h|^2.
+        type Row = (usize, f64, f64, [f64; MAX_LAYERS]);
+        let rows: Vec<Row> = (0..m)
             .into_par_iter()
             .map(|r| {
-                let mut folded = 0;
-                let mut sum2 = 0.0;
+                let mut row: Row = (0, 0.0, 0.0, [0.0; MAX_LAYERS]);
                 for c in 0..m {
                     let h = crate::rng::splitmix64(((r * m + c) as u64) ^ self.seed);
                     let jx = (h & 0xFFFF_FFFF) as f64 / 4_294_967_296.0;
                     let jz = (h >> 32) as f64 / 4_294_967_296.0;
                     let u = ((c as f64 + jx) / m as f64 * size) as f32;
                     let v = ((r as f64 + jz) / m as f64 * size) as f32;
-                    let s = sampler.sample(u, v);
-                    folded += usize::from(s.jacobian <= 0.0);
-                    sum2 += (s.height as f64).powi(2);
+                    // What `Sampler::fields` sums for the origin (0, 0), layer by layer.
+                    let mut sum = [0.0f32; FIELD_COUNT];
+                    for (i, l) in layers.iter().enumerate() {
+                        let t = l.read(u as f64 * l.inv_dx(), v as f64 * l.inv_dx(), interp);
+                        row.3[i] += slope2(&t);
+                        add_texel(&mut sum, &t);
+                    }
+                    let s = Sample::from_fields(&sum);
+                    row.0 += usize::from(s.jacobian <= 0.0);
+                    row.1 += (s.height as f64).powi(2);
+                    row.2 += slope2(&sum);
                 }
-                (folded, sum2)
+                row
             })
             .collect();
         let total = (m * m) as f64;
-        self.folded_fraction = rows.iter().map(|r| r.0).sum::<usize>() as f64 / total;
-        self.sampled_rms_m = (rows.iter().map(|r| r.1).sum::<f64>() / total).sqrt();
+        self.stats = Stats {
+            folded_fraction: rows.iter().map(|r| r.0).sum::<usize>() as f64 / total,
+            sampled_rms_m: (rows.iter().map(|r| r.1).sum::<f64>() / total).sqrt(),
+            sampled_mss: rows.iter().map(|r| r.2).sum::<f64>() / total,
+            lookup_mss: (0..layers.len())
+                .map(|i| rows.iter().map(|r| r.3[i]).sum::<f64>() / total)
+                .collect(),
+            grid_mss: layers
+                .iter()
+                .map(|l| {
+                    // fixed chunks summed in order: the same bits on any thread count
+                    let f = l.fields();
+                    let chunks: Vec<f64> = f
+                        .par_chunks(4096)
+                        .map(|c| c.iter().map(slope2).sum())
+                        .collect();
+                    chunks.iter().sum::<f64>() / f.len() as f64
+                })
+                .collect(),
+        };
     }
 
     /// Generation statistics (see [`OceanSummary`]).
@@ -397,9 +453,14 @@ impl Surface {
             .enumerate()
             .map(|(i, l)| {
                 let (k_min, k_max) = l.band();
-                let band_var = self.spectrum.as_ref().map_or(0.0, |s| {
-                    s.weighted_variance(k_min, k_max, |k| partition.weight(i, k))
-                });
+                let band = |moment: i32| {
+                    self.spectrum.as_ref().map_or(0.0, |s| {
+                        s.weighted_variance(k_min, k_max, |k| {
+                            k.powi(moment) * partition.weight(i, k)
+                        })
+                    })
+                };
+                let band_var = band(0);
                 LayerSummary {
                     size_m: l.size_m(),
                     n: l.n(),
@@ -408,6 +469,9 @@ impl Surface {
                     k_max,
                     spectrum_rms_m: band_var.sqrt() * self.amplitude_scale,
                     realization_rms_m: l.height_variance().sqrt(),
+                    mss_spectrum: band(2) * self.amplitude_scale.powi(2),
+                    mss_grid: self.stats.grid_mss.get(i).copied().unwrap_or(0.0),
+                    mss_lookup: self.stats.lookup_mss.get(i).copied().unwrap_or(0.0),
                     folded_fraction: l.folded_fraction(),
                 }
             })
@@ -425,10 +489,13 @@ impl Surface {
             model_rms_m: s.map_or(0.0, |s| s.total_variance().sqrt()),
             spectrum_rms_m: spectrum_var.sqrt(),
             realization_rms_m: realization_var.sqrt(),
-            sampled_rms_m: self.sampled_rms_m,
+            sampled_rms_m: self.stats.sampled_rms_m,
+            mss_spectrum: layers.iter().map(|l| l.mss_spectrum).sum(),
+            mss_grid: layers.iter().map(|l| l.mss_grid).sum(),
+            mss_lookup: self.stats.sampled_mss,
             hs_m: 4.0 * realization_var.sqrt(),
             amplitude_scale: self.amplitude_scale,
-            folded_fraction: self.folded_fraction,
+            folded_fraction: self.stats.folded_fraction,
             seconds: self.seconds,
             layers,
         }

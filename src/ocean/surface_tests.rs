@@ -386,3 +386,39 @@ fn layers_sum_and_set_time_moves_waves() {
     send_sync::<Surface>();
     send_sync::<Sampler<'_>>();
 }
+
+/// The mean square slope three ways on the default layers: the realization's grid gradients
+/// hold the spectrum's integral of k^2 P (a few per cent of realization scatter: the slope
+/// variance sits in many modes); reads between grid points lose some of it, bilinear more than
+/// bicubic, each layer no more than its grid holds; the sum's slopes are the layers' added.
+#[test]
+fn mean_square_slope_of_the_spectrum_the_grid_and_the_lookup() {
+    let read = |interp| {
+        let p = OceanParams {
+            interp,
+            ..OceanParams::default()
+        };
+        Surface::new(&p, 3).unwrap().summary()
+    };
+    let (bilinear, bicubic) = (read(Interp::Bilinear), read(Interp::Bicubic));
+    for s in [&bilinear, &bicubic] {
+        assert!((s.mss_grid / s.mss_spectrum - 1.0).abs() < 0.03, "{s:?}");
+        let layers: f64 = s.layers.iter().map(|l| l.mss_lookup).sum();
+        // independent layers: cross terms average out over the 512^2 points
+        assert!((s.mss_lookup / layers - 1.0).abs() < 0.01, "{s:?}");
+        for l in &s.layers {
+            assert!(l.mss_lookup < 1.01 * l.mss_grid, "{l:?}");
+            assert!((l.mss_grid / l.mss_spectrum - 1.0).abs() < 0.05, "{l:?}");
+        }
+    }
+    assert!(
+        bilinear.mss_lookup < 0.95 * bilinear.mss_spectrum,
+        "{bilinear:?}"
+    );
+    assert!(
+        bicubic.mss_lookup > bilinear.mss_lookup * 1.05,
+        "{bicubic:?}"
+    );
+    // The grid does not depend on how it is read.
+    assert_eq!(bilinear.mss_grid, bicubic.mss_grid);
+}
