@@ -132,8 +132,10 @@ fn film(
 #[test]
 #[ignore]
 fn a_scenario_against_itself_under_another_seed_is_a_null_result() {
-    let mut scene =
-        SceneConfig::load(Path::new("benches/results/estimator/calm-overcast.toml")).unwrap();
+    let mut scene = SceneConfig::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/results/estimator/calm-overcast.toml"),
+    )
+    .unwrap();
     scene.camera.width = 512;
     scene.camera.projection = Projection::Equirect {
         band_deg: Some((1.0, -6.0)),
@@ -175,7 +177,7 @@ fn a_scenario_against_itself_under_another_seed_is_a_null_result() {
     );
     // The difference itself is resolved, and the ratio narrowly: holding 1 is a test.
     assert!(e.scenarios[0].significant && e.scenarios[1].significant);
-    assert!(r.corrected.ci[1] - r.corrected.ci[0] < 0.2, "{r:?}");
+    assert!(r.corrected.ci[1] - r.corrected.ci[0] < 0.05, "{r:?}");
     assert!(r.corrected.contains(1.0) && !r.significant, "{r:?}");
     let nf = &e.scenarios[2];
     assert!(!nf.significant, "{:?}", nf.variance_corrected);
@@ -191,7 +193,8 @@ fn a_scenario_against_itself_under_another_seed_is_a_null_result() {
 #[test]
 #[ignore]
 fn compares_noise_floor_is_not_significant() {
-    let s = compare(64, 1, 64);
+    // Seed 11: the coverage test renders seeds 1 to 8 into folders of the same names.
+    let s = compare(64, 11, 64);
     let nf = &s.estimates.scenarios[3];
     assert_eq!(nf.name, "noise_floor");
     assert!(!nf.significant, "{:?}", nf.variance_corrected);

@@ -243,8 +243,8 @@ pub struct OceanSummary {
     /// RMS of the summed, interpolated surface on a jittered grid over the coarsest period.
     pub sampled_rms_m: f64,
     /// Mean square slope |grad h|^2 of the whole surface: the layers' spectrum and grid figures
-    /// summed, and the summed surface as the renderer reads it (same jittered grid); the
-    /// mapped normals carry the lookup's.
+    /// summed, and the summed surface as the renderer reads it (same jittered grid). Slopes of
+    /// h over the undisplaced plane: the normal (eq. 7) adds the displacement's derivatives.
     pub mss_spectrum: f64,
     pub mss_grid: f64,
     pub mss_lookup: f64,

@@ -72,14 +72,23 @@ pub fn pooled_std(variances: &[f64]) -> Interval {
 
 /// The geometric mean of per-realization ratios, with the t interval of their logs mapped
 /// back. A ratio that is infinite (its denominator not resolved from its noise) or 0 leaves
-/// nothing to average in logs: the pool is then unbounded, [0, inf].
+/// nothing to average in logs: the pool is then unbounded, [0, inf], about the median ratio.
+/// A NaN ratio (nothing measured) makes the pool NaN.
 pub fn pooled_ratio(ratios: &[f64]) -> Interval {
+    if ratios.iter().any(|r| r.is_nan()) {
+        return Interval {
+            value: f64::NAN,
+            ci: [f64::NAN; 2],
+        };
+    }
     let logs: Vec<f64> = ratios.iter().map(|&r| r.max(0.0).ln()).collect();
     if logs.iter().all(|l| l.is_finite()) {
         pooled_mean(&logs).map(f64::exp)
     } else {
+        let mut sorted = ratios.to_vec();
+        sorted.sort_by(f64::total_cmp);
         Interval {
-            value: mean(&logs).exp(),
+            value: super::quantile(&sorted, 0.5),
             ci: [0.0, f64::INFINITY],
         }
     }
@@ -126,30 +135,29 @@ mod tests {
     }
 
     /// Per-realization ratios spread log-normally about a known geometric mean, as those of
-    /// four seas: the interval covers it at its nominal rate, and is wider than the middle half
-    /// of the per-realization ratios.
+    /// four seas: the interval covers it at its nominal rate. (With four, it always spans their
+    /// range, since no log lies further than 1.5 s from their mean and t_3 s / 2 is 1.59 s.)
     #[test]
     fn a_pooled_ratio_holds_the_geometric_mean_at_its_nominal_rate() {
         let mut rng = Rng::keyed(&[9]);
         let (trials, rho) = (4000, 1.8_f64);
-        let (mut covered, mut wide) = (0, 0);
-        for _ in 0..trials {
-            let mut r: Vec<f64> = (0..4).map(|_| rho * (0.3 * rng.gauss()).exp()).collect();
-            let p = pooled_ratio(&r);
-            covered += usize::from(p.contains(rho));
-            r.sort_by(f64::total_cmp);
-            let iqr = super::super::quantile(&r, 0.75) - super::super::quantile(&r, 0.25);
-            wide += usize::from(p.ci[1] - p.ci[0] >= iqr);
-        }
+        let covered = (0..trials)
+            .filter(|_| {
+                let r: Vec<f64> = (0..4).map(|_| rho * (0.3 * rng.gauss()).exp()).collect();
+                pooled_ratio(&r).contains(rho)
+            })
+            .count();
         let share = covered as f64 / trials as f64;
         assert!((share - 0.95).abs() < 0.015, "{share}");
-        assert!(wide as f64 > 0.95 * trials as f64, "{wide} of {trials}");
     }
 
     #[test]
     fn an_unresolved_ratio_leaves_the_pool_unbounded() {
         let p = pooled_ratio(&[1.5, f64::INFINITY, 1.2, 1.4]);
-        assert_eq!((p.value, p.ci), (f64::INFINITY, [0.0, f64::INFINITY]));
+        assert_eq!((p.value, p.ci), (1.45, [0.0, f64::INFINITY]));
+        let p = pooled_ratio(&[0.0, f64::INFINITY, 1.2]);
+        assert_eq!((p.value, p.ci), (1.2, [0.0, f64::INFINITY]));
+        assert!(pooled_ratio(&[1.5, f64::NAN]).value.is_nan());
         // One realization: nothing known of the spread between seas.
         let p = pooled_ratio(&[2.0]);
         assert!(

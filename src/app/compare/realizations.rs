@@ -22,13 +22,22 @@ pub struct Realization {
     /// Its corrected improvement ratio and the interval of this one image.
     pub improvement_ratio: Interval,
     pub improvement_significant: bool,
-    /// Corrected band variances (high unmapped, low mapped, low unmapped, noise floor): what
-    /// the pooled stds average.
-    pub variance_corrected: [f64; 4],
+    /// Corrected band variances: what the pooled stds average.
+    pub variance_corrected: Variances,
     pub summary: PathBuf,
 }
 
-/// `summary.json` of a comparison over realizations.
+/// One realization's corrected band variance of each scenario against the baseline.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Variances {
+    pub high_unmapped: f64,
+    pub low_mapped: f64,
+    pub low_unmapped: f64,
+    pub noise_floor: f64,
+}
+
+/// `summary.json` of a comparison over realizations. JSON has no infinity: an unbounded
+/// interval end is null.
 #[derive(Clone, Debug, Serialize)]
 pub struct RealizationsSummary {
     pub commit: &'static str,
@@ -44,7 +53,9 @@ pub struct RealizationsSummary {
     pub improvement_significant: bool,
     /// The per-seed ratios' smallest, quartiles and largest.
     pub improvement_ratio_spread: [f64; 5],
-    /// Root of the mean band variance over realizations, with its t interval.
+    /// Root of the mean band variance over realizations, with the roots of its t interval (not
+    /// the ratio's pool: the ratio of these two stds weights the seas by how much they differ,
+    /// the pooled ratio weights them alike).
     pub std_high_unmapped_corrected: Interval,
     pub std_low_mapped_corrected: Interval,
     pub std_low_unmapped_corrected: Interval,
@@ -71,6 +82,9 @@ pub fn run(job: &CompareJob, n: usize) -> Result<RealizationsSummary, AppError> 
         if job.progress {
             eprintln!("compare: realization {} of {n} (ocean seed {seed})", i + 1);
         }
+        // The sample seed stays: common random numbers across the seas. Each ratio's own
+        // sample noise is then shared in part between them, which the spread between seas could
+        // understate; at the spp a comparison needs it is far below that spread.
         let mut one = job.clone();
         one.scene.render.ocean_seed = seed;
         one.out = job.out.join(format!("ocean-seed-{seed}"));
@@ -91,7 +105,12 @@ fn pool(job: &CompareJob, runs: Vec<(u64, CompareSummary)>, seconds: f64) -> Rea
                 ocean_seed: *seed,
                 improvement_ratio: s.improvement.corrected,
                 improvement_significant: s.improvement.significant,
-                variance_corrected: [v(0), v(1), v(2), v(3)],
+                variance_corrected: Variances {
+                    high_unmapped: v(0),
+                    low_mapped: v(1),
+                    low_unmapped: v(2),
+                    noise_floor: v(3),
+                },
                 summary: job
                     .out
                     .join(format!("ocean-seed-{seed}"))
@@ -99,10 +118,10 @@ fn pool(job: &CompareJob, runs: Vec<(u64, CompareSummary)>, seconds: f64) -> Rea
             }
         })
         .collect();
-    let column = |i: usize| -> Vec<f64> {
+    let column = |f: fn(&Variances) -> f64| -> Vec<f64> {
         realizations
             .iter()
-            .map(|r| r.variance_corrected[i])
+            .map(|r| f(&r.variance_corrected))
             .collect()
     };
     let mut each: Vec<f64> = realizations
@@ -118,10 +137,10 @@ fn pool(job: &CompareJob, runs: Vec<(u64, CompareSummary)>, seconds: f64) -> Rea
         improvement_ratio_ci: ratio.ci,
         improvement_significant: ratio.excludes(1.0),
         improvement_ratio_spread: [q(0.0), q(0.25), q(0.5), q(0.75), q(1.0)],
-        std_high_unmapped_corrected: pooled_std(&column(0)),
-        std_low_mapped_corrected: pooled_std(&column(1)),
-        std_low_unmapped_corrected: pooled_std(&column(2)),
-        std_noise_floor_corrected: pooled_std(&column(3)),
+        std_high_unmapped_corrected: pooled_std(&column(|v| v.high_unmapped)),
+        std_low_mapped_corrected: pooled_std(&column(|v| v.low_mapped)),
+        std_low_unmapped_corrected: pooled_std(&column(|v| v.low_unmapped)),
+        std_noise_floor_corrected: pooled_std(&column(|v| v.noise_floor)),
         realizations,
         rows_deg: job.rows_deg,
         spp: job.scene.render.spp,
@@ -134,8 +153,10 @@ impl fmt::Display for RealizationsSummary {
         let num = |x: f64| {
             if x.is_finite() {
                 format!("{x:.2}")
-            } else {
+            } else if x == f64::INFINITY {
                 "inf".into()
+            } else {
+                "n/a".into()
             }
         };
         let ratio = |i: &Interval| format!("{} [{}, {}]", num(i.value), num(i.ci[0]), num(i.ci[1]));
@@ -163,7 +184,7 @@ impl fmt::Display for RealizationsSummary {
         }
         writeln!(
             f,
-            "  noise-corrected std over the band, mean over realizations [95% interval]: high unmapped {}, low mapped {}, low unmapped {}, noise floor {}",
+            "  noise-corrected band std, root of the mean variance over realizations [95% interval]: high unmapped {}, low mapped {}, low unmapped {}, noise floor {}",
             std(&self.std_high_unmapped_corrected),
             std(&self.std_low_mapped_corrected),
             std(&self.std_low_unmapped_corrected),
