@@ -358,3 +358,21 @@ fn bad_input_exits_2_and_one_sun_rule_holds_for_every_sky() {
     assert_eq!(code, 0, "{err}");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// A sea state past the physical bounds is bad input, named before any work: an RMS height of
+/// 1e300 m panicked in the repeat metric, a wind of 1e308 m/s never finished.
+#[test]
+fn a_sea_state_past_its_physical_bounds_exits_2() {
+    for (flag, value, field) in [
+        ("--rms", "1e300", "ocean.rms_m"),
+        ("--wind", "1e308", "ocean.wind_speed"),
+        ("--fetch", "1e9", "ocean.fetch_km"),
+        ("--depth", "20000", "ocean.depth_m"),
+    ] {
+        let (code, _, err) = vastocean(&["ocean", flag, value]);
+        assert_eq!(code, 2, "{flag} {value}: {err}");
+        assert!(err.contains(field) && err.contains("at most"), "{err}");
+        // Numbers stay readable.
+        assert!(err.len() < 400, "{err}");
+    }
+}

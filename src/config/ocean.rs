@@ -169,6 +169,31 @@ fn positive(field: &str, v: f64) -> Result<(), ConfigError> {
     super::positive(&format!("ocean.{field}"), v)
 }
 
+/// Upper bounds of a sea state: past them the model describes no sea, and its arithmetic
+/// overflows (an RMS height of 1e300 m) or its integrals never end (a wind of 1e308 m/s).
+pub const WIND_MAX_M_S: f64 = 100.0;
+pub const RMS_MAX_M: f64 = 25.0;
+pub const FETCH_MAX_KM: f64 = 40_000.0;
+pub const DEPTH_MAX_M: f64 = 11_000.0;
+
+/// Finite, > 0 and at most `max` (`why` says what the bound is).
+fn positive_at_most(field: &str, v: f64, max: f64, why: &str) -> Result<(), ConfigError> {
+    positive(field, v)?;
+    if v > max {
+        let got = if v >= 1e6 {
+            format!("{v:e}")
+        } else {
+            v.to_string()
+        };
+        return Err(invalid(
+            &format!("ocean.{field}"),
+            &format!("at most {max} ({why})"),
+            got,
+        ));
+    }
+    Ok(())
+}
+
 fn finite(field: &str, v: f64) -> Result<(), ConfigError> {
     if !v.is_finite() {
         return Err(invalid(&format!("ocean.{field}"), "finite", v));
@@ -216,11 +241,31 @@ impl OceanParams {
     /// Checks every field; the error names the first bad one, e.g.
     /// `ocean.wind_speed must be finite and > 0 (got -1)`.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        positive("wind_speed", self.wind_speed)?;
-        positive("fetch_km", self.fetch_km)?;
-        positive("depth_m", self.depth_m)?;
+        positive_at_most(
+            "wind_speed",
+            self.wind_speed,
+            WIND_MAX_M_S,
+            "m/s at 10 m, about the strongest sustained wind measured in a tropical cyclone",
+        )?;
+        positive_at_most(
+            "fetch_km",
+            self.fetch_km,
+            FETCH_MAX_KM,
+            "km, the length of the equator",
+        )?;
+        positive_at_most(
+            "depth_m",
+            self.depth_m,
+            DEPTH_MAX_M,
+            "m; the deepest ocean is 10,935 m",
+        )?;
         if let Some(rms) = self.rms_m {
-            positive("rms_m", rms)?;
+            positive_at_most(
+                "rms_m",
+                rms,
+                RMS_MAX_M,
+                "m, a significant wave height of 100 m; the highest measured is about 19 m",
+            )?;
         }
         finite("wind_dir_deg", self.wind_dir_deg)?;
         if !self.gamma.is_finite() || self.gamma < 1.0 {
