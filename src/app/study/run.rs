@@ -1,0 +1,82 @@
+//! `study run`: one case's comparison into its folder, skipped when it is finished.
+
+use std::fmt;
+use std::path::Path;
+
+use serde::Serialize;
+
+use super::{case_dir, read_plan};
+use crate::app::AppError;
+use crate::app::compare::{CompareJob, CompareSummary};
+use crate::config::SceneConfig;
+
+/// What `study run` did with a case.
+#[derive(Clone, Debug, Serialize)]
+pub enum CaseOutcome {
+    /// It was finished already (its summary exists); nothing was done.
+    Skipped(usize),
+    Ran(usize, Box<CompareSummary>),
+}
+
+/// Runs case `k` (1-based) of the study in `dir` into `cases/K/`, unless it is finished and
+/// `force` is not set. `threads` overrides the case's own thread count when set.
+pub fn run_case(
+    dir: &Path,
+    k: usize,
+    force: bool,
+    threads: Option<usize>,
+    progress: bool,
+) -> Result<CaseOutcome, AppError> {
+    let plan = read_plan(dir)?;
+    if k == 0 || k > plan.cases {
+        return Err(AppError::input(format!(
+            "case {k} is not in the plan (1..={})",
+            plan.cases
+        )));
+    }
+    let cdir = case_dir(dir, k);
+    if cdir.join("summary.json").exists() && !force {
+        return Ok(CaseOutcome::Skipped(k));
+    }
+    let mut scene = SceneConfig::load(&cdir.join("scene.toml"))?;
+    if progress {
+        // Plain lines: a batch job's log has no terminal.
+        eprintln!("case {k}: running into {}", cdir.display());
+    }
+    if let Some(t) = threads {
+        scene.render.threads = t;
+    }
+    let job = CompareJob {
+        high: plan.high,
+        low: plan.low,
+        scene,
+        rows_deg: plan.rows_deg,
+        max_boost: plan.max_boost,
+        out: cdir,
+        progress,
+    };
+    // compare writes summary.json last, atomically.
+    let s = crate::app::compare::run(&job)?;
+    Ok(CaseOutcome::Ran(k, Box::new(s)))
+}
+
+impl fmt::Display for CaseOutcome {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            CaseOutcome::Skipped(k) => write!(f, "case {k}: finished already (--force to rerun)"),
+            CaseOutcome::Ran(k, s) => write!(
+                f,
+                "case {k}: improvement ratio {:.2} [{:.2}, {:.2}]{} in {:.0} s",
+                s.improvement_ratio_corrected,
+                s.improvement_ratio_ci[0],
+                s.improvement_ratio_ci[1],
+                if s.improvement_significant {
+                    ", significant"
+                } else {
+                    ", not significant"
+                },
+                s.seconds_total
+            ),
+        }
+    }
+}
