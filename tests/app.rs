@@ -493,5 +493,62 @@ fn study_plans_runs_through_gnu_parallel_resumes_and_summarizes() {
     let per_sky = std::fs::read_to_string(study.join("per_sky.csv")).unwrap();
     assert!(per_sky.lines().count() >= 2, "{per_sky}");
     assert!(study.join("scatter.png").metadata().unwrap().len() > 1000);
+
+    // A case over two ocean realizations: each sea's comparison in its folder, the row pooled,
+    // and the one-sea case of the same plan seed read alike otherwise.
+    let pooled = dir.join("pooled");
+    let mut plan3 = plan.to_vec();
+    let pooled_s = s(&pooled);
+    plan3[3] = &pooled_s;
+    plan3.extend(["--realizations", "2"]);
+    plan3[5] = "1";
+    assert_eq!(vastocean(&plan3).0, 0);
+    let (code, out, err) = vastocean(&["study", "run", &pooled_s, "--threads", "2", "--case", "1"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("over 2 ocean seeds"), "{out}");
+    let case = pooled.join("cases/1");
+    for seed in [1, 2] {
+        assert!(
+            case.join(format!("ocean-seed-{seed}/summary.json"))
+                .is_file()
+        );
+    }
+    let (code, out, err) = vastocean(&["study", "summarize", &pooled_s, "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let row = &v["rows"][0];
+    assert_eq!(row["realizations"], 2);
+    for key in [
+        "std_low_mapped_corrected",
+        "improvement_ratio_corrected",
+        "improvement_ratio",
+        "cost_factor",
+    ] {
+        assert!(
+            row[key].as_f64().is_some_and(f64::is_finite),
+            "{key}: {row}"
+        );
+    }
+    let one: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(case.join("ocean-seed-1/summary.json")).unwrap(),
+    )
+    .unwrap();
+    let ratios: Vec<f64> = ["ocean-seed-1", "ocean-seed-2"]
+        .iter()
+        .map(|d| {
+            let v: serde_json::Value = serde_json::from_str(
+                &std::fs::read_to_string(case.join(d).join("summary.json")).unwrap(),
+            )
+            .unwrap();
+            v["improvement_ratio_corrected"].as_f64().unwrap()
+        })
+        .collect();
+    // The pool is the geometric mean of the seas' ratios.
+    let pooled_ratio = row["improvement_ratio_corrected"].as_f64().unwrap();
+    assert!(
+        (pooled_ratio - (ratios[0] * ratios[1]).sqrt()).abs() < 1e-9,
+        "{ratios:?} {row}"
+    );
+    assert_eq!(one["commit"], row["commit"]);
     let _ = std::fs::remove_dir_all(dir);
 }

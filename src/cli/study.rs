@@ -58,6 +58,10 @@ pub enum StudyCommand {
         /// --spp (see `compare --max-boost`; 1 renders every pixel alike).
         #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u16).range(1..=1024))]
         max_boost: u16,
+        /// Ocean realizations per case: with N > 1 each case is run for N ocean seeds and
+        /// pooled (see `compare --realizations`), N times the work.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=64))]
+        realizations: u16,
         /// The sky collection to draw from.
         #[arg(long, default_value = "skies")]
         skies: PathBuf,
@@ -126,6 +130,7 @@ pub fn run(c: StudyCommand) -> Result<()> {
             wrong_side,
             clip_sun,
             max_boost,
+            realizations,
             skies,
             json,
         } => {
@@ -153,6 +158,7 @@ pub fn run(c: StudyCommand) -> Result<()> {
                 high: lod(high, high_near_size),
                 low: lod(low, low_near_size),
                 max_boost,
+                realizations,
                 skies_dir: skies,
             };
             emit(&app::study::plan(&job)?, json)

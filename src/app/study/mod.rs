@@ -39,7 +39,8 @@ pub const RANGES: Ranges = Ranges {
     rms_m: (0.08, 0.6),
 };
 
-fn uniform() -> u16 {
+/// What a plan written before a setting existed ran with: a uniform render, one sea.
+fn one() -> u16 {
     1
 }
 
@@ -56,8 +57,13 @@ pub struct Plan {
     pub rows_deg: (f64, f64),
     /// Most samples a noisy pixel may take (`compare --max-boost`); plans written before it
     /// existed read 1, a uniform render, as they ran.
-    #[serde(default = "uniform")]
+    #[serde(default = "one")]
     pub max_boost: u16,
+    /// Ocean realizations per case (`compare --realizations`): with more than one, a case is
+    /// its sea state, pooled over that many ocean seeds from the case's own; plans written
+    /// before it existed read 1.
+    #[serde(default = "one")]
+    pub realizations: u16,
     /// Sky maps the cases draw from, in `skies/` beside this file.
     pub skies: Vec<String>,
     pub ranges: Ranges,
@@ -75,6 +81,7 @@ pub struct PlanJob {
     pub high: LodConfig,
     pub low: LodConfig,
     pub max_boost: u16,
+    pub realizations: u16,
     /// The sky collection to draw from.
     pub skies_dir: PathBuf,
 }
@@ -137,6 +144,9 @@ pub fn plan(job: &PlanJob) -> Result<PlanReport, AppError> {
     if job.max_boost == 0 {
         return Err(AppError::input("--max-boost is at least 1"));
     }
+    if job.realizations == 0 {
+        return Err(AppError::input("--realizations is at least 1"));
+    }
     let plan_path = job.out.join("plan.toml");
     if plan_path.exists() {
         return Err(AppError::input(format!(
@@ -190,6 +200,7 @@ pub fn plan(job: &PlanJob) -> Result<PlanReport, AppError> {
         low: job.low.clone(),
         rows_deg: (0.0, -5.0),
         max_boost: job.max_boost,
+        realizations: job.realizations,
         skies: skies.clone(),
         ranges: RANGES,
     };

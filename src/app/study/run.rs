@@ -7,6 +7,7 @@ use serde::Serialize;
 
 use super::{case_dir, read_plan};
 use crate::app::AppError;
+use crate::app::compare::realizations::RealizationsSummary;
 use crate::app::compare::{CompareJob, CompareSummary};
 use crate::config::SceneConfig;
 
@@ -16,6 +17,8 @@ pub enum CaseOutcome {
     /// It was finished already (its summary exists); nothing was done.
     Skipped(usize),
     Ran(usize, Box<CompareSummary>),
+    /// Run for the plan's ocean realizations and pooled.
+    RanPooled(usize, Box<RealizationsSummary>),
 }
 
 /// Runs case `k` (1-based) of the study in `dir` into `cases/K/`, unless it is finished and
@@ -55,28 +58,49 @@ pub fn run_case(
         out: cdir,
         progress,
     };
-    // compare writes summary.json last, atomically.
-    let s = crate::app::compare::run(&job)?;
-    Ok(CaseOutcome::Ran(k, Box::new(s)))
+    // compare writes summary.json last, atomically (pooled: after every realization).
+    Ok(match plan.realizations {
+        0 | 1 => CaseOutcome::Ran(k, Box::new(crate::app::compare::run(&job)?)),
+        n => CaseOutcome::RanPooled(
+            k,
+            Box::new(crate::app::compare::realizations::run(&job, n.into())?),
+        ),
+    })
 }
 
 impl fmt::Display for CaseOutcome {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            CaseOutcome::Skipped(k) => write!(f, "case {k}: finished already (--force to rerun)"),
-            CaseOutcome::Ran(k, s) => write!(
-                f,
-                "case {k}: improvement ratio {:.2} [{:.2}, {:.2}]{} in {:.0} s",
+        let (k, ratio, ci, significant, seconds, seas) = match self {
+            CaseOutcome::Skipped(k) => {
+                return write!(f, "case {k}: finished already (--force to rerun)");
+            }
+            CaseOutcome::Ran(k, s) => (
+                k,
                 s.improvement_ratio_corrected,
-                s.improvement_ratio_ci[0],
-                s.improvement_ratio_ci[1],
-                if s.improvement_significant {
-                    ", significant"
-                } else {
-                    ", not significant"
-                },
-                s.seconds_total
+                s.improvement_ratio_ci,
+                s.improvement_significant,
+                s.seconds_total,
+                String::new(),
             ),
-        }
+            CaseOutcome::RanPooled(k, s) => (
+                k,
+                s.improvement_ratio_corrected,
+                s.improvement_ratio_ci,
+                s.improvement_significant,
+                s.seconds_total,
+                format!(" over {} ocean seeds", s.realizations.len()),
+            ),
+        };
+        write!(
+            f,
+            "case {k}: improvement ratio {ratio:.2} [{:.2}, {:.2}]{seas}{} in {seconds:.0} s",
+            ci[0],
+            ci[1],
+            if significant {
+                ", significant"
+            } else {
+                ", not significant"
+            },
+        )
     }
 }

@@ -22,6 +22,11 @@ pub struct CaseRow {
     pub rms_m: f64,
     pub sky: String,
     pub sun_elevation_deg: f64,
+    /// Ocean realizations pooled into the row (1: one sea). With more, the stds are roots of
+    /// mean band variances and the ratio the geometric mean over the seas (`compare
+    /// --realizations`); the columns from the plain statistic to the cost are medians over
+    /// the seas.
+    pub realizations: usize,
     pub std_high_unmapped_corrected: f64,
     pub std_low_mapped_corrected: f64,
     pub std_low_mapped_ci: [f64; 2],
@@ -91,6 +96,64 @@ fn sun_elevation(scene: &SceneConfig) -> f64 {
         .map_or(f64::NAN, |img| crate::sky::tools::find_sun(&img).0)
 }
 
+/// An unbounded upper end is null in JSON.
+fn pair(val: &serde_json::Value) -> [f64; 2] {
+    [
+        val[0].as_f64().unwrap_or(f64::NAN),
+        val[1].as_f64().unwrap_or(f64::INFINITY),
+    ]
+}
+
+fn read_json(path: &Path) -> Result<serde_json::Value, AppError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| AppError::Input(format!("cannot read {}: {e}", path.display()).into()))?;
+    serde_json::from_str(&text)
+        .map_err(|e| AppError::Input(format!("{}: {e}", path.display()).into()))
+}
+
+/// The columns of a row that one comparison gives and a pool of seas does not: read from each
+/// sea's comparison, and their medians for a pooled case.
+#[derive(Clone, Copy)]
+struct Minor {
+    plain_ratio: f64,
+    without_glint: f64,
+    median_rows: f64,
+    trimmed: f64,
+    cost_factor: f64,
+    glint_rows: usize,
+    noise_model_check: f64,
+}
+
+impl Minor {
+    fn of(v: &serde_json::Value) -> Minor {
+        let value = |key: &str| v[key]["value"].as_f64().unwrap_or(f64::NAN);
+        Minor {
+            plain_ratio: v["improvement_ratio"].as_f64().unwrap_or(f64::NAN),
+            without_glint: value("improvement_ratio_without_glint"),
+            median_rows: value("improvement_ratio_median_rows"),
+            trimmed: value("improvement_ratio_trimmed"),
+            cost_factor: v["sampling"]["cost_factor"].as_f64().unwrap_or(1.0),
+            glint_rows: v["estimates"]["scenarios"][0]["glint_rows_deg"]
+                .as_array()
+                .map_or(0, |a| a.len()),
+            noise_model_check: value("noise_model_check"),
+        }
+    }
+
+    fn median(seas: &[Minor]) -> Minor {
+        let m = |f: fn(&Minor) -> f64| quartiles(&seas.iter().map(f).collect::<Vec<_>>()).0;
+        Minor {
+            plain_ratio: m(|s| s.plain_ratio),
+            without_glint: m(|s| s.without_glint),
+            median_rows: m(|s| s.median_rows),
+            trimmed: m(|s| s.trimmed),
+            cost_factor: m(|s| s.cost_factor),
+            glint_rows: m(|s| s.glint_rows as f64).round() as usize,
+            noise_model_check: m(|s| s.noise_model_check),
+        }
+    }
+}
+
 /// Gathers the finished cases of the study in `dir`.
 pub fn summarize(dir: &Path) -> Result<StudySummary, AppError> {
     let plan = read_plan(dir)?;
@@ -117,18 +180,48 @@ pub fn summarize(dir: &Path) -> Result<StudySummary, AppError> {
             .entry(sky.clone())
             .or_insert_with(|| sun_elevation(&scene));
         let f = |key: &str| v[key].as_f64().unwrap_or(f64::NAN);
-        // An unbounded upper end is null in JSON.
-        let pair = |val: &serde_json::Value| {
-            [
-                val[0].as_f64().unwrap_or(f64::NAN),
-                val[1].as_f64().unwrap_or(f64::INFINITY),
-            ]
+        // A pooled case lists its seas; each has its own comparison in ocean-seed-S/.
+        let seas: Vec<serde_json::Value> = match v["realizations"].as_array() {
+            Some(list) => list
+                .iter()
+                .map(|r| {
+                    read_json(
+                        &cdir
+                            .join(format!("ocean-seed-{}", r["ocean_seed"]))
+                            .join("summary.json"),
+                    )
+                })
+                .collect::<Result<_, _>>()?,
+            None => vec![v.clone()],
         };
-        let scenario = |name: &str| {
-            v["estimates"]["scenarios"]
-                .as_array()
-                .and_then(|a| a.iter().find(|s| s["name"] == name))
-                .map_or([f64::NAN; 2], |s| pair(&s["std_corrected"]["ci"]))
+        let (std, minor) = if seas.len() > 1 {
+            let pooled = |key: &str| {
+                let iv = &v[format!("{key}_corrected")];
+                (iv["value"].as_f64().unwrap_or(f64::NAN), pair(&iv["ci"]))
+            };
+            (
+                [
+                    (pooled("std_high_unmapped").0, [f64::NAN; 2]),
+                    pooled("std_low_mapped"),
+                    pooled("std_low_unmapped"),
+                ],
+                Minor::median(&seas.iter().map(Minor::of).collect::<Vec<_>>()),
+            )
+        } else {
+            let scenario = |name: &str| {
+                v["estimates"]["scenarios"]
+                    .as_array()
+                    .and_then(|a| a.iter().find(|s| s["name"] == name))
+                    .map_or([f64::NAN; 2], |s| pair(&s["std_corrected"]["ci"]))
+            };
+            (
+                [
+                    (f("std_high_unmapped_corrected"), [f64::NAN; 2]),
+                    (f("std_low_mapped_corrected"), scenario("low_mapped")),
+                    (f("std_low_unmapped_corrected"), scenario("low_unmapped")),
+                ],
+                Minor::of(&v),
+            )
         };
         rows.push(CaseRow {
             case: k,
@@ -138,33 +231,26 @@ pub fn summarize(dir: &Path) -> Result<StudySummary, AppError> {
             rms_m: scene.ocean.rms_m.unwrap_or(f64::NAN),
             sky,
             sun_elevation_deg: sun,
-            std_high_unmapped_corrected: f("std_high_unmapped_corrected"),
-            std_low_mapped_corrected: f("std_low_mapped_corrected"),
-            std_low_mapped_ci: scenario("low_mapped"),
-            std_low_unmapped_corrected: f("std_low_unmapped_corrected"),
-            std_low_unmapped_ci: scenario("low_unmapped"),
-            improvement_ratio: f("improvement_ratio"),
+            realizations: seas.len(),
+            std_high_unmapped_corrected: std[0].0,
+            std_low_mapped_corrected: std[1].0,
+            std_low_mapped_ci: std[1].1,
+            std_low_unmapped_corrected: std[2].0,
+            std_low_unmapped_ci: std[2].1,
+            improvement_ratio: minor.plain_ratio,
             // null: the ratio is infinite (low-mapped's difference is below its noise).
             improvement_ratio_corrected: v["improvement_ratio_corrected"]
                 .as_f64()
                 .unwrap_or(f64::INFINITY),
             improvement_ratio_ci: pair(&v["improvement_ratio_ci"]),
             improvement_significant: v["improvement_significant"].as_bool().unwrap_or(false),
-            improvement_ratio_without_glint: v["improvement_ratio_without_glint"]["value"]
-                .as_f64()
-                .unwrap_or(f64::NAN),
-            improvement_ratio_median_rows: v["improvement_ratio_median_rows"]["value"]
-                .as_f64()
-                .unwrap_or(f64::NAN),
-            improvement_ratio_trimmed: v["improvement_ratio_trimmed"]["value"]
-                .as_f64()
-                .unwrap_or(f64::NAN),
-            cost_factor: v["sampling"]["cost_factor"].as_f64().unwrap_or(1.0),
+            improvement_ratio_without_glint: minor.without_glint,
+            improvement_ratio_median_rows: minor.median_rows,
+            improvement_ratio_trimmed: minor.trimmed,
+            cost_factor: minor.cost_factor,
             commit: v["commit"].as_str().unwrap_or("unknown").to_string(),
-            glint_rows: v["estimates"]["scenarios"][0]["glint_rows_deg"]
-                .as_array()
-                .map_or(0, |a| a.len()),
-            noise_model_check: v["noise_model_check"]["value"].as_f64().unwrap_or(f64::NAN),
+            glint_rows: minor.glint_rows,
+            noise_model_check: minor.noise_model_check,
             seconds_total: f("seconds_total"),
         });
     }
@@ -218,12 +304,12 @@ fn write_outputs(
     let cases = stage(cases_csv, |w| {
         writeln!(
             w,
-            "case,wind_m_s,fetch_km,depth_m,rms_m,sky,sun_elevation_deg,std_high_unmapped_corrected,std_low_mapped_corrected,std_low_mapped_lo,std_low_mapped_hi,std_low_unmapped_corrected,std_low_unmapped_lo,std_low_unmapped_hi,improvement_ratio,improvement_ratio_corrected,improvement_ratio_lo,improvement_ratio_hi,improvement_significant,improvement_ratio_without_glint,improvement_ratio_median_rows,improvement_ratio_trimmed,glint_rows,noise_model_check,cost_factor,seconds_total,commit"
+            "case,wind_m_s,fetch_km,depth_m,rms_m,sky,sun_elevation_deg,realizations,std_high_unmapped_corrected,std_low_mapped_corrected,std_low_mapped_lo,std_low_mapped_hi,std_low_unmapped_corrected,std_low_unmapped_lo,std_low_unmapped_hi,improvement_ratio,improvement_ratio_corrected,improvement_ratio_lo,improvement_ratio_hi,improvement_significant,improvement_ratio_without_glint,improvement_ratio_median_rows,improvement_ratio_trimmed,glint_rows,noise_model_check,cost_factor,seconds_total,commit"
         )?;
         for r in rows {
             writeln!(
                 w,
-                "{},{:.3},{:.2},{:.1},{:.4},{},{:.2},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.4},{:.4},{:.4},{:.4},{},{:.4},{:.4},{:.4},{},{:.3},{:.3},{:.1},{}",
+                "{},{:.3},{:.2},{:.1},{:.4},{},{:.2},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.4},{:.4},{:.4},{:.4},{},{:.4},{:.4},{:.4},{},{:.3},{:.3},{:.1},{}",
                 r.case,
                 r.wind_m_s,
                 r.fetch_km,
@@ -231,6 +317,7 @@ fn write_outputs(
                 r.rms_m,
                 r.sky,
                 r.sun_elevation_deg,
+                r.realizations,
                 r.std_high_unmapped_corrected,
                 r.std_low_mapped_corrected,
                 r.std_low_mapped_ci[0],
