@@ -376,3 +376,46 @@ fn a_sea_state_past_its_physical_bounds_exits_2() {
         assert!(err.len() < 400, "{err}");
     }
 }
+
+/// `--out DIR/` names a folder, not a file prefix: refused before work, no hidden `.exr`; a pass
+/// that would hold no samples is refused rather than written empty.
+#[test]
+fn outputs_that_cannot_mean_what_was_asked_are_refused() {
+    let dir = tmp("prefix");
+    let slash = format!("{}/", dir.display());
+    for args in [
+        vec!["render", "--width", "64", "--spp", "1", "--out", &slash],
+        vec![
+            "render",
+            "--width",
+            "64",
+            "--spp",
+            "1",
+            "--out",
+            dir.to_str().unwrap(),
+        ],
+        vec![
+            "render", "--width", "64", "--spp", "2", "--pass", "1/2", "--out", &slash,
+        ],
+    ] {
+        let (code, _, err) = vastocean(&args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(err.contains("names a folder"), "{err}");
+    }
+    let pass = dir.join("p");
+    let (code, _, err) = vastocean(&[
+        "render",
+        "--width",
+        "64",
+        "--spp",
+        "2",
+        "--pass",
+        "3/3",
+        "--out",
+        pass.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("holds no samples at 2 spp"), "{err}");
+    assert!(files(&dir).is_empty(), "{:?}", files(&dir));
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -136,6 +136,7 @@ fn frame_path(out: &Path, index: usize, ext: &str) -> PathBuf {
 /// JSON after them.
 pub fn run(job: &FramesJob) -> Result<SequenceReport, AppError> {
     job.scene.validate()?;
+    super::check_prefix(&job.out)?;
     let times = job.frames.times();
     let json = with_extension(&job.out, ".json");
     let mut outputs = vec![json.clone()];

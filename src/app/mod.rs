@@ -164,6 +164,19 @@ pub fn with_extension(prefix: &std::path::Path, ext: &str) -> std::path::PathBuf
     p.into()
 }
 
+/// Checks that `prefix` (an `--out PREFIX` that names PREFIX.exr, PREFIX.png, ...) names files,
+/// not a folder: `--out DIR/` wrote the hidden files `DIR/.exr`, `DIR/.png`, `DIR/.json`.
+pub fn check_prefix(prefix: &std::path::Path) -> Result<(), AppError> {
+    let text = prefix.as_os_str().to_string_lossy();
+    if text.is_empty() || text.ends_with(std::path::MAIN_SEPARATOR) || prefix.is_dir() {
+        return Err(AppError::input(format!(
+            "--out {text:?} names a folder; it is a file prefix (PREFIX.exr, PREFIX.png, PREFIX.json), e.g. {}",
+            prefix.join("render").display()
+        )));
+    }
+    Ok(())
+}
+
 /// Checks, before any work, that the files of an output set can be written: none is a
 /// directory, their folder exists (it is created) and takes a new file. Removes the temporary
 /// files that killed earlier runs left beside them. A problem is the user's to fix (exit 2).

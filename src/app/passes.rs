@@ -199,6 +199,7 @@ pub fn merge(job: &MergeJob) -> Result<RenderReport, AppError> {
     if job.passes.is_empty() {
         return Err(AppError::input("merge needs at least one pass file"));
     }
+    super::check_prefix(&job.out)?;
     let (exr, png, json) = (
         with_extension(&job.out, ".exr"),
         with_extension(&job.out, ".png"),

@@ -29,6 +29,7 @@ pub struct RenderJob {
 /// (an existing set is replaced whole, or left untouched when anything fails).
 pub fn run(job: &RenderJob) -> Result<RenderReport, AppError> {
     job.scene.validate()?;
+    super::check_prefix(&job.out)?;
     if let Some((k, n)) = job.pass {
         return run_pass(job, k, n);
     }
@@ -53,6 +54,12 @@ pub fn run(job: &RenderJob) -> Result<RenderReport, AppError> {
 /// Renders pass `k` of `n` into PREFIX.pass.
 fn run_pass(job: &RenderJob, k: usize, n: usize) -> Result<RenderReport, AppError> {
     let file = with_extension(&job.out, ".pass");
+    let scene_spp = job.scene.render.spp;
+    if super::passes::pass_samples(k, n, scene_spp) == 0 {
+        return Err(AppError::input(format!(
+            "pass {k} of {n} holds no samples at {scene_spp} spp (pass K takes samples K-1, K-1+N, ...): split into at most {scene_spp} passes"
+        )));
+    }
     check_outputs(std::slice::from_ref(&file))?;
     let samples = Samples {
         pass: k - 1,
