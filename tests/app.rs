@@ -550,5 +550,12 @@ fn study_plans_runs_through_gnu_parallel_resumes_and_summarizes() {
         "{ratios:?} {row}"
     );
     assert_eq!(one["commit"], row["commit"]);
+
+    // An emptied summary is not a finished case: missing, not a row of NaN.
+    std::fs::write(study.join("cases/1/summary.json"), "{}").unwrap();
+    let (code, out, err) = vastocean(&["study", "summarize", &s(&study), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["missing"], serde_json::json!([1, 3]), "{out}");
     let _ = std::fs::remove_dir_all(dir);
 }

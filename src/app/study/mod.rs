@@ -98,6 +98,14 @@ fn case_dir(dir: &Path, k: usize) -> PathBuf {
     dir.join("cases").join(k.to_string())
 }
 
+/// A case's summary, if the case is finished: its summary.json reads as a comparison's (a
+/// truncated or emptied file, `{}`, is not one, and the case is run again).
+fn finished_summary(cdir: &Path) -> Option<serde_json::Value> {
+    let text = std::fs::read_to_string(cdir.join("summary.json")).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    (v["improvement_ratio_ci"].is_array() && v["commit"].is_string()).then_some(v)
+}
+
 /// Case `k`'s scene (1-based), drawn from the seed, and its sky's file name.
 fn draw_case(job: &PlanJob, skies: &[String], k: usize) -> (SceneConfig, String) {
     let mut r = Rng::keyed(&[job.seed, 0x7374_7564, k as u64]);

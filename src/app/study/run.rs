@@ -5,7 +5,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::{case_dir, read_plan};
+use super::{case_dir, finished_summary, read_plan};
 use crate::app::AppError;
 use crate::app::compare::realizations::RealizationsSummary;
 use crate::app::compare::{CompareJob, CompareSummary};
@@ -38,7 +38,7 @@ pub fn run_case(
         )));
     }
     let cdir = case_dir(dir, k);
-    if cdir.join("summary.json").exists() && !force {
+    if !force && finished_summary(&cdir).is_some() {
         return Ok(CaseOutcome::Skipped(k));
     }
     let mut scene = SceneConfig::load(&cdir.join("scene.toml"))?;

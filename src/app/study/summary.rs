@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use super::{case_dir, read_plan};
+use super::{case_dir, finished_summary, read_plan};
 use crate::analysis::charts::{ScatterPoint, scatter};
 use crate::app::AppError;
 use crate::config::SceneConfig;
@@ -162,13 +162,11 @@ pub fn summarize(dir: &Path) -> Result<StudySummary, AppError> {
     let mut suns = std::collections::HashMap::new();
     for k in 1..=plan.cases {
         let cdir = case_dir(dir, k);
-        let Ok(text) = std::fs::read_to_string(cdir.join("summary.json")) else {
+        // Unfinished, or a summary that is not a comparison's: missing, to be run again.
+        let Some(v) = finished_summary(&cdir) else {
             missing.push(k);
             continue;
         };
-        let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
-            AppError::Input(format!("{}: {e}", cdir.join("summary.json").display()).into())
-        })?;
         let scene = SceneConfig::load(&cdir.join("scene.toml"))?;
         let sky = scene
             .sky
