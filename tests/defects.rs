@@ -419,3 +419,54 @@ fn outputs_that_cannot_mean_what_was_asked_are_refused() {
     assert!(files(&dir).is_empty(), "{:?}", files(&dir));
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Sizes that aborted on allocation (exit 134) or ran for minutes into many GB are bad input,
+/// named by their flag, before any work.
+#[test]
+fn sizes_past_what_the_machine_can_hold_exit_2() {
+    let embree: &[&[&str]] = if cfg!(feature = "embree") {
+        &[
+            &["smoke", "--rays", "99999999999999"],
+            &["smoke", "--cells", "100000"],
+            &["crosscheck", "--rays", "200000000"],
+        ]
+    } else {
+        &[]
+    };
+    let general: &[&[&str]] = &[
+        &[
+            "sky",
+            "generate",
+            "--kind",
+            "clear",
+            "--sun-elevation",
+            "5",
+            "--width",
+            "1000000",
+            "--out",
+            "/tmp/x.exr",
+        ],
+        &[
+            "sky",
+            "sheet",
+            "skies/clear-sun03.exr",
+            "--thumb-width",
+            "100000",
+            "--out",
+            "/tmp/x.png",
+        ],
+    ];
+    for &args in general.iter().chain(embree) {
+        let (code, _, err) = vastocean(args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        let flag = args
+            .iter()
+            .rev()
+            .find(|a| a.starts_with("--") && **a != "--out")
+            .unwrap();
+        assert!(
+            err.contains(flag) && err.contains("is not in"),
+            "{args:?}: {err}"
+        );
+    }
+}

@@ -1,23 +1,28 @@
 //! `crosscheck` and `smoke`: the commands that need Embree.
 
 use anyhow::Result;
+use clap::builder::RangedU64ValueParser;
 use vastocean::app;
 use vastocean::config::LodChoice;
 
 use super::choice;
 use crate::emit;
 
+/// Most rays `crosscheck` and `smoke` take (their buffers are held whole: 100 M rays are a few GB).
+const MAX_RAYS: u64 = 100_000_000;
+
 #[derive(clap::Args)]
 pub struct CrosscheckArgs {
     /// The ocean mesh to trace (the default case-22 ocean, camera 2 m up).
     #[arg(long, value_parser = choice::<LodChoice>(), default_value = "paper-low")]
     lod: LodChoice,
-    /// Random rays aimed into the mesh's bounds (the camera rays of the small render come on top).
-    #[arg(long, default_value_t = 1_000_000)]
+    /// Random rays aimed into the mesh's bounds (the camera rays of the small render come on
+    /// top), at most 100 million.
+    #[arg(long, default_value_t = 1_000_000, value_parser = RangedU64ValueParser::<usize>::new().range(1..=MAX_RAYS))]
     rays: usize,
     /// Width of the small 360 degree render whose camera rays are traced too and which is
     /// rendered with both backends.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = RangedU64ValueParser::<usize>::new().range(8..=4096))]
     width: usize,
     /// Samples per pixel of the small render.
     #[arg(long, default_value_t = 2)]
@@ -52,11 +57,11 @@ pub fn crosscheck(a: CrosscheckArgs) -> Result<()> {
 
 #[derive(clap::Args)]
 pub struct SmokeArgs {
-    /// Grid cells per side (two triangles per cell).
-    #[arg(long, default_value_t = 1000)]
+    /// Grid cells per side (two triangles per cell), at most 4096 (33.5 M triangles).
+    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u32).range(1..=4096))]
     cells: u32,
-    /// Number of rays to trace.
-    #[arg(long, default_value_t = 1_000_000)]
+    /// Number of rays to trace, at most 100 million.
+    #[arg(long, default_value_t = 1_000_000, value_parser = RangedU64ValueParser::<usize>::new().range(1..=MAX_RAYS))]
     rays: usize,
     /// BVH build quality.
     #[arg(long, value_parser = choice::<vastocean::accel::embree::Quality>(), default_value = "medium")]

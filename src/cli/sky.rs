@@ -31,8 +31,8 @@ pub enum SkyCommand {
         /// Seed of the clouds (partly cloudy).
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// Map width, texels (height = width / 2).
-        #[arg(long, default_value_t = 1024)]
+        /// Map width, texels (height = width / 2), 16 to 16384.
+        #[arg(long, default_value_t = 1024, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(16..=16384))]
         width: usize,
         #[arg(long)]
         out: PathBuf,
@@ -66,11 +66,11 @@ pub enum SkyCommand {
         /// Equirectangular EXR sky maps.
         #[arg(required = true)]
         files: Vec<PathBuf>,
-        /// Width of each thumbnail, pixels.
-        #[arg(long, default_value_t = 384)]
+        /// Width of each thumbnail, pixels, 16 to 2048.
+        #[arg(long, default_value_t = 384, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(16..=2048))]
         thumb_width: usize,
-        /// Thumbnails per row.
-        #[arg(long, default_value_t = 3)]
+        /// Thumbnails per row, 1 to 16.
+        #[arg(long, default_value_t = 3, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=16))]
         columns: usize,
         #[arg(long)]
         out: PathBuf,
