@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+use super::report::{num, ratio};
 use super::{CompareJob, CompareSummary};
 use crate::analysis::error::Interval;
 use crate::analysis::error::realizations::{pooled_ratio, pooled_std};
@@ -150,16 +151,6 @@ fn pool(job: &CompareJob, runs: Vec<(u64, CompareSummary)>, seconds: f64) -> Rea
 
 impl fmt::Display for RealizationsSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let num = |x: f64| {
-            if x.is_finite() {
-                format!("{x:.2}")
-            } else if x == f64::INFINITY {
-                "inf".into()
-            } else {
-                "n/a".into()
-            }
-        };
-        let ratio = |i: &Interval| format!("{} [{}, {}]", num(i.value), num(i.ci[0]), num(i.ci[1]));
         let std = |i: &Interval| format!("{:.5} [{:.5}, {:.5}]", i.value, i.ci[0], i.ci[1]);
         writeln!(
             f,

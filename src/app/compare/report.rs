@@ -71,19 +71,25 @@ pub(super) fn film_channels(film: &crate::render::film::Film) -> Vec<(String, Ve
     out
 }
 
+/// A ratio as printed: two decimals, "inf" for an unbounded one, "n/a" for none.
+pub(super) fn num(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x:.2}")
+    } else if x == f64::INFINITY {
+        "inf".into()
+    } else {
+        "n/a".into()
+    }
+}
+
+/// A ratio and its interval as printed: "1.68 [1.40, 2.02]".
+pub(super) fn ratio(i: &Interval) -> String {
+    format!("{} [{}, {}]", num(i.value), num(i.ci[0]), num(i.ci[1]))
+}
+
 impl fmt::Display for CompareSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let ci = |i: &Interval| format!("{:.5} [{:.5}, {:.5}]", i.value, i.ci[0], i.ci[1]);
-        let num = |x: f64| {
-            if x.is_finite() {
-                format!("{x:.2}")
-            } else if x == f64::INFINITY {
-                "inf".into()
-            } else {
-                "n/a".into()
-            }
-        };
-        let ratio = |i: &Interval| format!("{} [{}, {}]", num(i.value), num(i.ci[0]), num(i.ci[1]));
         writeln!(
             f,
             "compare: {} rows from {} to {} degrees at {} spp; std of the luminance difference from the baseline over the band",
