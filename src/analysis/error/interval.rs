@@ -120,6 +120,15 @@ impl Interval {
         }
     }
 
+    /// The interval with its ends held at or above `floor` (a ratio of stds is never below 0,
+    /// but a bootstrap interval widened about its estimate can reach there).
+    pub fn at_least(self, floor: f64) -> Interval {
+        Interval {
+            value: self.value,
+            ci: self.ci.map(|c| c.max(floor)),
+        }
+    }
+
     /// Whether the interval lies entirely above `x`.
     pub fn above(&self, x: f64) -> bool {
         self.ci[0] > x

@@ -350,7 +350,10 @@ impl Estimator {
                 if y > 0.0 { root(x / y) } else { f64::INFINITY }
             }
         };
-        let corrected = self.interval2(num, den, ratio(|v| v.signal));
+        // A ratio of stds is at least 0 (its replicates are; widening them about the estimate
+        // can reach below).
+        let interval = |f| self.interval2(num, den, ratio(f)).at_least(0.0);
+        let corrected = interval(|v| v.signal);
         let significant = corrected.excludes(1.0);
         let v = corrected.value;
         let spp_to_resolve = (!significant && v.is_finite() && v != 1.0).then(|| {
@@ -368,11 +371,11 @@ impl Estimator {
             plain: pa.plain_std / pb.plain_std,
             corrected,
             significant,
-            median_rows: self.interval2(num, den, ratio(|v| v.median_signal)),
-            trimmed: self.interval2(num, den, ratio(|v| v.trimmed_signal)),
-            without_glint: self.interval2(num, den, ratio(|v| v.without_glint)),
-            trend: self.interval2(num, den, ratio(|v| v.trend)),
-            residual: self.interval2(num, den, ratio(|v| v.residual)),
+            median_rows: interval(|v| v.median_signal),
+            trimmed: interval(|v| v.trimmed_signal),
+            without_glint: interval(|v| v.without_glint),
+            trend: interval(|v| v.trend),
+            residual: interval(|v| v.residual),
             spp_to_resolve,
         }
     }

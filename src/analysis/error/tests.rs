@@ -368,3 +368,17 @@ fn too_few_batches_is_an_error() {
     });
     assert!(matches!(err, Err(EstimateError::TooFewSamples(_))));
 }
+
+/// Where the noise swamps both differences, a ratio's interval is wide but never reaches below
+/// 0 (the bootstrap widens its replicates about the estimate, which could).
+#[test]
+fn a_ratio_interval_never_reaches_below_zero() {
+    for k in 0..12 {
+        let (cam, base, a, _) = synthetic(256, 600 + k, 0.04, 0.2, 0.2 * 8f64.sqrt());
+        let (_, _, b, _) = synthetic(256, 700 + k, 0.04, 0.2, 0.2 * 8f64.sqrt());
+        let r = estimate(&cam, &base, &[&a, &b], k).ratio(0, 1);
+        for iv in [r.corrected, r.median_rows, r.trimmed, r.trend, r.residual] {
+            assert!(iv.ci[0] >= 0.0, "{iv:?}");
+        }
+    }
+}
