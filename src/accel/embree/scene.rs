@@ -1,0 +1,307 @@
+//! A committed Embree scene over one triangle mesh: build, refit, and the [`Accel`] queries.
+
+use std::ffi::c_void;
+use std::ptr::NonNull;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+use super::{BuildOptions, Device, EmbreeError, error_name, ffi};
+use crate::accel::{Accel, Hit, Ray};
+use crate::mesh::Mesh;
+
+/// A committed Embree scene holding one triangle mesh.
+pub struct Scene {
+    raw: NonNull<c_void>,
+    geometry: NonNull<c_void>,
+    mesh: Arc<Mesh>,
+    build_seconds: f64,
+    options: BuildOptions,
+    device: Arc<Device>,
+    /// Rays with a NaN or infinite origin or direction, answered as misses without Embree.
+    rejected: AtomicU64,
+    /// What the device's memory monitor saw the build allocate (the BVH and Embree's own
+    /// per-geometry data; the shared mesh buffers are not copied).
+    bytes: u64,
+}
+
+// SAFETY: a committed scene is only read (rtcIntersect*, rtcOccluded*, rtcInterpolate), which
+// Embree allows from any number of threads at once; `Scene` has no method that modifies it,
+// and the shared mesh buffers are immutable behind the Arc.
+unsafe impl Send for Scene {}
+unsafe impl Sync for Scene {}
+
+impl Scene {
+    /// Attaches `mesh`, builds the BVH and returns the committed scene.
+    pub fn new(
+        device: &Arc<Device>,
+        mesh: Arc<Mesh>,
+        options: BuildOptions,
+    ) -> Result<Scene, EmbreeError> {
+        if !mesh.is_padded() {
+            return Err(EmbreeError::Unpadded);
+        }
+        if mesh.triangle_count() >= u32::MAX as usize {
+            return Err(EmbreeError::TooLarge(mesh.triangle_count()));
+        }
+        let dev = device.raw.as_ptr();
+        // Held from attach to commit: errors drained below are this build's.
+        let _building = device.building.lock().unwrap_or_else(|e| e.into_inner());
+        let flags = if options.compact {
+            ffi::VO_SCENE_COMPACT
+        } else {
+            0
+        } | if options.robust {
+            ffi::VO_SCENE_ROBUST
+        } else {
+            0
+        };
+        // SAFETY: dev is live; the scene is released in Drop or on the error paths below.
+        let scene = unsafe { ffi::vo_scene_new(dev, options.quality.raw(), flags) };
+        device.check("rtcNewScene")?;
+        let scene = NonNull::new(scene).ok_or(EmbreeError::Call {
+            call: "rtcNewScene",
+            code: 1,
+            name: error_name(1),
+            message: "no scene returned".into(),
+        })?;
+        let release = |e| {
+            // SAFETY: scene is live and not yet owned by a Scene value.
+            unsafe { ffi::vo_scene_release(scene.as_ptr()) };
+            e
+        };
+        let uvs = if mesh.uvs().is_empty() {
+            std::ptr::null()
+        } else {
+            mesh.uvs().as_ptr() as *const f32
+        };
+        let mut geom_id = 0u32;
+        // SAFETY: buffers are validated (indices in range), padded (checked above) and kept
+        // alive and unmodified by the Arc<Mesh> stored in the returned Scene.
+        let geometry = unsafe {
+            ffi::vo_scene_attach_triangles(
+                dev,
+                scene.as_ptr(),
+                options.quality.raw(),
+                mesh.positions().as_ptr() as *const f32,
+                mesh.vertex_count(),
+                mesh.indices().as_ptr() as *const u32,
+                mesh.triangle_count(),
+                uvs,
+                &mut geom_id,
+            )
+        };
+        device.check("rtcAttachGeometry").map_err(release)?;
+        let geometry = NonNull::new(geometry).ok_or_else(|| {
+            release(EmbreeError::Call {
+                call: "rtcNewGeometry",
+                code: 1,
+                name: error_name(1),
+                message: "no geometry returned".into(),
+            })
+        })?;
+        let before = device.memory().0;
+        let start = Instant::now();
+        // SAFETY: scene is live and complete.
+        unsafe { ffi::vo_scene_commit(scene.as_ptr()) };
+        let build_seconds = start.elapsed().as_secs_f64();
+        let bytes = device.memory().0.saturating_sub(before);
+        device.check("rtcCommitScene").map_err(release)?;
+        Ok(Scene {
+            raw: scene,
+            geometry,
+            mesh,
+            build_seconds,
+            options,
+            device: device.clone(),
+            rejected: AtomicU64::new(0),
+            bytes,
+        })
+    }
+
+    /// The Embree version of the device this scene was built on.
+    pub fn device_version(&self) -> String {
+        self.device.version()
+    }
+
+    /// Wall-clock seconds the BVH build (rtcCommitScene) took.
+    pub fn build_seconds(&self) -> f64 {
+        self.build_seconds
+    }
+
+    pub fn options(&self) -> BuildOptions {
+        self.options
+    }
+
+    /// Moves the mesh's vertices to `positions` in place (the topology stays) and updates the
+    /// BVH: a refit of its bounds when the scene was built with [`Quality::Refit`], a rebuild
+    /// otherwise. Returns the seconds Embree took. Fails without touching anything when
+    /// something else still holds the scene's mesh or the positions are invalid.
+    pub fn refit(&mut self, positions: &[[f32; 3]]) -> Result<f64, EmbreeError> {
+        self.refit_with(|m| m.set_positions(positions))
+    }
+
+    /// As [`Scene::refit`], moving the vertex normals too (an animation frame).
+    pub fn refit_vertices(
+        &mut self,
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+    ) -> Result<f64, EmbreeError> {
+        self.refit_with(|m| m.set_vertices(positions, normals))
+    }
+
+    fn refit_with(
+        &mut self,
+        update: impl FnOnce(&mut Mesh) -> Result<(), crate::mesh::MeshError>,
+    ) -> Result<f64, EmbreeError> {
+        let mesh = Arc::get_mut(&mut self.mesh).ok_or(EmbreeError::Shared)?;
+        update(mesh).map_err(|e| EmbreeError::Mesh(e.to_string()))?;
+        let _building = self
+            .device
+            .building
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        let start = Instant::now();
+        // SAFETY: the scene and geometry are live; the vertex buffer is the one attached (the
+        // Vec was changed in place, never reallocated) and nothing traces while `&mut self`.
+        unsafe { ffi::vo_scene_refit(self.raw.as_ptr(), self.geometry.as_ptr()) };
+        let seconds = start.elapsed().as_secs_f64();
+        self.device.check("rtcCommitScene (refit)")?;
+        Ok(seconds)
+    }
+
+    /// Axis-aligned bounds of the scene as Embree sees it: (lower, upper).
+    pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
+        let (mut lo, mut hi) = ([0f32; 3], [0f32; 3]);
+        // SAFETY: scene is committed; the arrays have three elements each.
+        unsafe { ffi::vo_scene_bounds(self.raw.as_ptr(), lo.as_mut_ptr(), hi.as_mut_ptr()) };
+        (lo, hi)
+    }
+
+    /// Whether anything lies on the ray within `[tnear, tfar]`.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        if !self.admit(ray) {
+            return false;
+        }
+        // SAFETY: Ray has vo_ray's layout (checked at compile time); scene is committed.
+        unsafe {
+            ffi::vo_occluded1(self.raw.as_ptr(), ray as *const Ray as *const ffi::vo_ray) != 0
+        }
+    }
+}
+
+impl Scene {
+    /// Whether `ray` may be handed to Embree; counts the ones that may not.
+    #[inline]
+    fn admit(&self, ray: &Ray) -> bool {
+        let ok = ray.is_finite();
+        if !ok {
+            self.rejected.fetch_add(1, Ordering::Relaxed);
+        }
+        ok
+    }
+}
+
+fn to_hit(h: &ffi::vo_hit) -> Option<Hit> {
+    (h.prim != ffi::VO_INVALID_ID).then_some(Hit {
+        t: h.t,
+        prim: h.prim,
+        u: h.u,
+        v: h.v,
+    })
+}
+
+impl Accel for Scene {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        if !self.admit(ray) {
+            return None;
+        }
+        let mut h = ffi::vo_hit::default();
+        // SAFETY: as in `occluded`; `h` is a valid out-parameter.
+        unsafe {
+            ffi::vo_intersect1(
+                self.raw.as_ptr(),
+                ray as *const Ray as *const ffi::vo_ray,
+                &mut h,
+            )
+        };
+        to_hit(&h)
+    }
+
+    fn intersect_many(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), hits.len(), "one hit slot per ray");
+        // Fixed-size chunks keep the shim's output on the stack: no allocation per batch.
+        const CHUNK: usize = 64;
+        let mut out = [ffi::vo_hit::default(); CHUNK];
+        for (rs, hs) in rays.chunks(CHUNK).zip(hits.chunks_mut(CHUNK)) {
+            if !rs.iter().all(Ray::is_finite) {
+                // Rare: trace this chunk ray by ray, so the bad rays are answered (and counted)
+                // without reaching Embree.
+                for (r, h) in rs.iter().zip(hs.iter_mut()) {
+                    *h = self.intersect(r);
+                }
+                continue;
+            }
+            // SAFETY: `rs` is a slice of vo_ray-layout rays; `out` has room for rs.len() hits.
+            unsafe {
+                ffi::vo_intersect_batch(
+                    self.raw.as_ptr(),
+                    rs.as_ptr() as *const ffi::vo_ray,
+                    out.as_mut_ptr(),
+                    rs.len(),
+                )
+            };
+            for (h, o) in hs.iter_mut().zip(&out) {
+                *h = to_hit(o);
+            }
+        }
+    }
+
+    fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    fn interpolate_uv(&self, hit: &Hit) -> [f32; 2] {
+        // In Rust from the barycentrics: rtcInterpolate through the shim cost ~157
+        // instructions a hit (issue 16's callgrind), this a dozen. A foreign `Hit` must not
+        // index outside the buffers.
+        let m = &self.mesh;
+        match m.indices().get(hit.prim as usize) {
+            Some(&tri) if !m.uvs().is_empty() => Mesh::interpolate(m.uvs(), tri, hit.u, hit.v),
+            _ => [0.0; 2],
+        }
+    }
+
+    fn name(&self) -> &'static str {
+        "embree"
+    }
+
+    fn rejected_rays(&self) -> u64 {
+        self.rejected.load(Ordering::Relaxed)
+    }
+
+    fn bytes(&self) -> u64 {
+        self.bytes
+    }
+
+    fn update_vertices(
+        &mut self,
+        positions: &[[f32; 3]],
+        normals: &[[f32; 3]],
+    ) -> Result<f64, String> {
+        self.refit_vertices(positions, normals)
+            .map_err(|e| e.to_string())
+    }
+
+    fn take_error(&self) -> Option<String> {
+        self.device.check("tracing").err().map(|e| e.to_string())
+    }
+}
+
+impl Drop for Scene {
+    fn drop(&mut self) {
+        // SAFETY: the scene (and the geometry it owns) is released once; the device outlives it
+        // through `device`.
+        unsafe { ffi::vo_scene_release(self.raw.as_ptr()) }
+    }
+}
