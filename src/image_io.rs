@@ -54,7 +54,7 @@ pub struct WriteError {
 /// [`Staged::commit`] renames it into place; dropping it uncommitted removes the temporary
 /// file, so every error path (and a panic) cleans up. [`commit_all`] makes a set of staged
 /// files appear together, or not at all. Every temporary file is also listed in a process-wide
-/// registry, so an interrupt ([`remove_temps_and_exit`]) removes what the run had not finished.
+/// registry, so an interrupt ([`remove_temps`]) removes what the run had not finished.
 #[must_use = "a staged file is removed unless committed"]
 pub struct Staged {
     tmp: PathBuf,
@@ -82,14 +82,18 @@ fn unregister(tmp: &Path) {
     lock(&TEMPS).retain(|t| t != tmp);
 }
 
-/// Removes every temporary file of this process and exits with `code` (for SIGINT/SIGTERM:
-/// 130). Waits for a set commit in progress to finish first.
-pub fn remove_temps_and_exit(code: i32) -> ! {
-    let _commit = lock(&COMMITTING);
-    for t in lock(&TEMPS).drain(..) {
+/// For an interrupt: removes the temporary files of writes under way (after any set being
+/// renamed into place is finished) and returns how many there were. The process must exit next:
+/// the commit lock stays held, so no later set can be committed.
+pub fn remove_temps() -> usize {
+    let commit = lock(&COMMITTING);
+    let temps: Vec<PathBuf> = lock(&TEMPS).drain(..).collect();
+    for t in &temps {
         let _ = fs::remove_file(t);
     }
-    std::process::exit(code)
+    // Holding the commit lock until exit keeps a later set from being half-renamed.
+    std::mem::forget(commit);
+    temps.len()
 }
 
 fn temp_name(path: &Path) -> PathBuf {

@@ -121,7 +121,65 @@ fn a_sequence_writes_numbered_frames_and_one_json() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("seq.json")).unwrap()).unwrap();
     assert_eq!(json["frames"].as_array().unwrap().len(), 3);
     assert_eq!(json["frames_planned"], 3);
+    assert!(r.stale_frames.is_empty());
+    // A shorter sequence over the same prefix names the longer one's leftover frame.
+    let r = run(&FramesJob {
+        scene: cfg_small(),
+        out: dir.join("seq"),
+        progress: false,
+        frames: parse_frames("0:0.2:0.1").unwrap(),
+    })
+    .unwrap();
+    assert!(r.stale_frames.is_empty(), "three frames overwrite three");
+    // Times are rounded: 0.2, not 0.30000000000000004-style sums.
+    assert_eq!(
+        r.frames.iter().map(|f| f.time_s).collect::<Vec<_>>(),
+        [0.0, 0.1, 0.2]
+    );
+    let r = run(&FramesJob {
+        scene: cfg_small(),
+        out: dir.join("seq"),
+        progress: false,
+        frames: parse_frames("0:0:1").unwrap(),
+    })
+    .unwrap();
+    let stale: Vec<_> = ["0002.exr", "0002.png", "0003.exr", "0003.png"]
+        .iter()
+        .map(|f| dir.join(format!("seq.{f}")))
+        .collect();
+    assert_eq!(r.stale_frames, stale);
+    let warnings = vastocean::app::Remarks::warnings(&r);
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("seq.0002.exr") && w.contains("earlier")),
+        "{warnings:?}"
+    );
     let _ = std::fs::remove_dir_all(dir);
+}
+
+fn cfg_small() -> SceneConfig {
+    let mut cfg = scene(Backend::Rust);
+    cfg.camera.width = 48;
+    cfg.render.spp = 2;
+    cfg
+}
+
+#[test]
+fn frame_times_print_as_typed() {
+    let t = parse_frames("0:1:0.1").unwrap().times();
+    assert_eq!(t.len(), 11);
+    assert_eq!(t[3].to_string(), "0.3");
+    assert_eq!(t[7].to_string(), "0.7");
+    assert_eq!(
+        FrameRange {
+            start_s: -1.0,
+            end_s: 0.0,
+            step_s: 0.5
+        }
+        .times(),
+        [-1.0, -0.5, 0.0]
+    );
 }
 
 #[test]

@@ -29,10 +29,12 @@ pub struct FrameRange {
 }
 
 impl FrameRange {
+    /// The frames' times, rounded to the nanosecond so that 0:1:0.1 gives 0.3, not
+    /// 0.30000000000000004 (which would print and land in the JSON as such).
     pub fn times(&self) -> Vec<f64> {
         let n = ((self.end_s - self.start_s) / self.step_s + 1e-9).floor() as usize + 1;
         (0..n)
-            .map(|i| self.start_s + i as f64 * self.step_s)
+            .map(|i| ((self.start_s + i as f64 * self.step_s) * 1e9).round() / 1e9)
             .collect()
     }
 }
@@ -125,7 +127,56 @@ pub struct SequenceReport {
     pub rebuild_over_update: Option<f64>,
     pub seconds_total: f64,
     pub json: PathBuf,
+    /// The sea state's range notes (see `crate::ocean::Spectrum::range_notes`).
+    pub ocean_notes: Vec<String>,
+    /// Frame files beyond this sequence's last that an earlier, longer sequence with the same
+    /// prefix left (they are not this sequence's and are left alone).
+    pub stale_frames: Vec<PathBuf>,
     pub config: SceneConfig,
+}
+
+impl super::Remarks for SequenceReport {
+    fn notes(&self) -> Vec<String> {
+        super::sea_state_note(&self.ocean_notes)
+            .into_iter()
+            .collect()
+    }
+    fn warnings(&self) -> Vec<String> {
+        let mut w: Vec<String> = self
+            .frames
+            .iter()
+            .flat_map(|r| &r.warnings)
+            .collect::<std::collections::BTreeSet<_>>()
+            .into_iter()
+            .cloned()
+            .collect();
+        if let (Some(first), Some(last)) = (self.stale_frames.first(), self.stale_frames.last()) {
+            w.push(format!(
+                "{} .. {} are from an earlier, longer sequence with this prefix, not from this one (left alone; remove them before making a video)",
+                first.display(),
+                last.display()
+            ));
+        }
+        w
+    }
+}
+
+/// Frame files of an earlier sequence past frame `frames`: PREFIX.NNNN.exr/.png for NNNN from
+/// `frames + 1` on, as long as either exists.
+fn stale_frames(out: &Path, frames: usize) -> Vec<PathBuf> {
+    let mut found = Vec::new();
+    for index in frames + 1..=MAX_FRAMES {
+        let files: Vec<PathBuf> = ["exr", "png"]
+            .iter()
+            .map(|ext| frame_path(out, index, ext))
+            .filter(|p| p.exists())
+            .collect();
+        if files.is_empty() {
+            break;
+        }
+        found.extend(files);
+    }
+    found
 }
 
 fn frame_path(out: &Path, index: usize, ext: &str) -> PathBuf {
@@ -168,6 +219,8 @@ pub fn run(job: &FramesJob) -> Result<SequenceReport, AppError> {
         rebuild_over_update: None,
         seconds_total: 0.0,
         json: json.clone(),
+        ocean_notes: Vec::new(),
+        stale_frames: stale_frames(&job.out, times.len()),
         config: cfg.clone(),
     };
     for (i, &time_s) in times.iter().enumerate() {
@@ -209,6 +262,7 @@ pub fn run(job: &FramesJob) -> Result<SequenceReport, AppError> {
             escaped_below_horizon: r.report.escaped_below_horizon,
             warnings: r.report.warnings,
         });
+        report.ocean_notes = r.report.ocean_notes;
         summarize(&mut report);
         report.seconds_total = start.elapsed().as_secs_f64();
         commit_all(vec![stage_json(&json, &report)?])?;
@@ -274,11 +328,6 @@ impl fmt::Display for SequenceReport {
                 f,
                 "  geometry update + refit {u:.3} s per frame (median): {x:.1}x faster than the first frame's tessellation + build"
             )?;
-        }
-        let warnings: std::collections::BTreeSet<&String> =
-            self.frames.iter().flat_map(|r| &r.warnings).collect();
-        for w in warnings {
-            writeln!(f, "  warning: {w}")?;
         }
         write!(
             f,

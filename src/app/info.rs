@@ -25,7 +25,6 @@ pub fn run(threads: usize) -> Result<Info, AppError> {
             #[cfg(feature = "embree")]
             "embree",
             "rust",
-            "brute",
         ],
         #[cfg(feature = "embree")]
         embree: crate::accel::embree::describe(threads)?,

@@ -152,6 +152,29 @@ impl From<crate::accel::embree::EmbreeError> for AppError {
     }
 }
 
+/// What a command's result says beside its report. The command line prints these on stderr after
+/// the report (with `--json` too), so that stdout holds only the report: notes are worth knowing
+/// and nothing is wrong; warnings say that something in the output may be wrong.
+pub trait Remarks {
+    fn notes(&self) -> Vec<String> {
+        Vec::new()
+    }
+    fn warnings(&self) -> Vec<String> {
+        Vec::new()
+    }
+}
+
+/// The one note a sea state outside the spectrum models' range gets, from the clauses of
+/// [`crate::ocean::Spectrum::range_notes`]; `None` if there are none.
+pub fn sea_state_note(clauses: &[String]) -> Option<String> {
+    (!clauses.is_empty()).then(|| {
+        format!(
+            "this sea state lies outside the range the spectrum's models were fitted on, and they extrapolate (the surface is still a valid sea): {}",
+            clauses.join("; ")
+        )
+    })
+}
+
 /// "Embree 3.13.5" or "Rust BVH": which structure traced, for the one-line summaries.
 pub fn backend_label(embree_version: Option<&str>) -> String {
     embree_version.map_or_else(|| "Rust BVH".to_string(), |v| format!("Embree {v}"))

@@ -28,18 +28,23 @@ pub struct OceanReport {
     pub summary: OceanSummary,
     /// How much the summed surface repeats itself (see `crate::ocean::repeat`).
     pub repeat_correlation: RepeatCorrelation,
-    /// Inputs outside the models' range (see `crate::ocean::Spectrum::validity_warnings`).
-    pub validity_warnings: Vec<String>,
+    /// Where the sea state lies outside the range the spectrum's models were fitted on (see
+    /// `crate::ocean::Spectrum::range_notes`).
+    pub range_notes: Vec<String>,
     #[serde(skip)]
     pub params: OceanParams,
     #[serde(skip)]
     pub png: Option<PathBuf>,
 }
 
-impl OceanReport {
-    /// Warnings a user should see (on stderr).
-    pub fn warnings(&self) -> Vec<String> {
-        let mut w = self.validity_warnings.clone();
+impl super::Remarks for OceanReport {
+    fn notes(&self) -> Vec<String> {
+        super::sea_state_note(&self.range_notes)
+            .into_iter()
+            .collect()
+    }
+    fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
         if self.summary.folded_fraction > 0.0 {
             w.push(format!(
                 "{:.3}% of the surface folds over itself (Jacobian <= 0); lower --choppiness to avoid it",
@@ -67,9 +72,9 @@ pub fn run(job: &OceanJob) -> Result<OceanReport, AppError> {
     let summary = surface.summary();
     let sampler = surface.sampler([0.0, 0.0]);
     let repeat_correlation = repeat_correlation(&sampler, job.params.wind_dir_deg);
-    let validity_warnings = surface
+    let range_notes = surface
         .spectrum()
-        .map_or_else(Vec::new, |s| s.validity_warnings());
+        .map_or_else(Vec::new, |s| s.range_notes());
     if let Some((path, from, to, n)) = &job.profile {
         let csv = profile_csv(&sampler, *from, *to, *n);
         crate::image_io::write_atomically(path, |w| std::io::Write::write_all(w, csv.as_bytes()))?;
@@ -81,7 +86,7 @@ pub fn run(job: &OceanJob) -> Result<OceanReport, AppError> {
     Ok(OceanReport {
         summary,
         repeat_correlation,
-        validity_warnings,
+        range_notes,
         params: job.params.clone(),
         png: job.png.as_ref().map(|p| p.0.clone()),
     })
@@ -119,7 +124,7 @@ impl fmt::Display for OceanReport {
         )?;
         writeln!(
             f,
-            "  mean square slope {:.5} spectrum, {:.5} grid points, {:.5} as read ({:?}: {:+.1} % of the spectrum's)",
+            "  mean square slope {:.5} spectrum, {:.5} grid points, {:.5} as read ({}: {:+.1} % of the spectrum's)",
             s.mss_spectrum,
             s.mss_grid,
             s.mss_lookup,

@@ -260,11 +260,7 @@ pub fn merge(job: &MergeJob) -> Result<RenderReport, AppError> {
     r.self_hits = c.self_hits;
     r.mrays_per_s = c.rays as f64 / r.seconds_trace.max(1e-12) / 1e6;
     r.normal_map_share = r.seconds_normal_map / r.seconds_trace.max(1e-12);
-    r.warnings = warnings(
-        &r.ocean_warnings,
-        r.folded_fraction,
-        c.escaped_below_horizon,
-    );
+    r.warnings = warnings(r.folded_fraction, c.escaped_below_horizon);
 
     let film = Film::from_states(r.width, r.height, samples_per_pixel, &states);
     r.noise_rms = film.noise_rms();
@@ -297,15 +293,24 @@ impl fmt::Display for Merged {
                 p.samples_per_pixel,
                 self.0.config.render.spp
             )?;
-            if !p.missing.is_empty() {
-                writeln!(
-                    f,
-                    "  missing passes {:?}: the image has fewer samples than a whole render",
-                    p.missing
-                )?;
-            }
         }
         write!(f, "{}", self.0)
+    }
+}
+
+impl super::Remarks for Merged {
+    fn notes(&self) -> Vec<String> {
+        self.0.notes()
+    }
+    fn warnings(&self) -> Vec<String> {
+        let mut w = self.0.warnings();
+        if let Some(p) = self.0.passes.as_ref().filter(|p| !p.missing.is_empty()) {
+            w.push(format!(
+                "missing passes {:?}: the image has fewer samples than a whole render",
+                p.missing
+            ));
+        }
+        w
     }
 }
 

@@ -82,6 +82,33 @@ fn run_pass(job: &RenderJob, k: usize, n: usize) -> Result<RenderReport, AppErro
     Ok(report)
 }
 
+/// The noise of a render in words a person can act on: how uncertain a pixel is, relative to the
+/// image, and how many samples would halve it (the standard error falls as 1/sqrt(spp)).
+pub fn noise_line(rms: f64, relative: f64, spp: u32) -> String {
+    let mut line = format!(
+        "noise: a pixel's luminance is uncertain by {:.1}% of the image's mean (RMS standard error {rms:.2e}); --spp {} would halve it",
+        100.0 * relative,
+        4 * u64::from(spp)
+    );
+    if relative > 1.0 {
+        line.push_str(
+            "; above 100% a few very bright samples (sun glints found by chance) carry most of it, and the figure itself is uncertain",
+        );
+    }
+    line
+}
+
+impl super::Remarks for RenderReport {
+    fn notes(&self) -> Vec<String> {
+        super::sea_state_note(&self.ocean_notes)
+            .into_iter()
+            .collect()
+    }
+    fn warnings(&self) -> Vec<String> {
+        self.warnings.clone()
+    }
+}
+
 impl fmt::Display for RenderReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
@@ -107,20 +134,13 @@ impl fmt::Display for RenderReport {
             self.seconds_total
         )?;
         if let (Some(n), Some(r)) = (self.noise_rms, self.noise_rms_relative) {
-            writeln!(
-                f,
-                "  noise: RMS standard error of pixel luminance {n:.3e} ({:.2}% of the mean)",
-                100.0 * r
-            )?;
+            writeln!(f, "  {}", noise_line(n, r, self.spp))?;
         }
         writeln!(
             f,
             "  NaN samples {}, wrong-side directions {}, truncated paths {}, camera rays escaping below the horizon {}",
             self.nan_count, self.wrong_side_count, self.truncated_paths, self.escaped_below_horizon
         )?;
-        for w in &self.warnings {
-            writeln!(f, "  warning: {w}")?;
-        }
         match (&self.pass_file, &self.passes) {
             (Some(file), Some(p)) => write!(
                 f,

@@ -62,7 +62,14 @@ pub fn import(job: &ImportJob) -> Result<ImportReport, AppError> {
     }
     validate_map(&job.photo, &img)?;
     if let Some(az) = job.sun_azimuth_deg {
-        let r = tools::rotate_sun_to(&mut img, az);
+        let r = tools::rotate_sun_to(&mut img, az).ok_or_else(|| {
+            AppError::input(format!(
+                "--sun-azimuth: {} has no sun to turn (its brightest region peaks at {:.1}x the median sky, a sun at {}x or more)",
+                job.photo.display(),
+                tools::brightest_region(&img).contrast,
+                tools::SUN_CONTRAST
+            ))
+        })?;
         report.notes.push(format!(
             "rotated {} by {r:.2} degrees in azimuth",
             job.photo.display()
@@ -105,11 +112,19 @@ impl std::fmt::Display for SkyInfo {
         writeln!(f, "{} x {}", self.width, self.height)?;
         writeln!(f, "  mean luminance          {:.6}", self.mean_radiance)?;
         writeln!(f, "  peak luminance          {:.6}", self.peak_radiance)?;
-        writeln!(
-            f,
-            "  sun (brightest region)  elevation {:.2} deg, azimuth {:.2} deg",
-            self.sun_elevation_deg, self.sun_azimuth_deg
-        )?;
+        match (self.sun_elevation_deg, self.sun_azimuth_deg) {
+            (Some(el), Some(az)) => writeln!(
+                f,
+                "  sun                     elevation {el:.2} deg, azimuth {az:.2} deg ({:.0}x the median sky)",
+                self.sun_contrast
+            )?,
+            _ => writeln!(
+                f,
+                "  sun                     none (the brightest region is {:.1}x the median sky; a sun is {}x or more)",
+                self.sun_contrast,
+                tools::SUN_CONTRAST
+            )?,
+        }
         write!(
             f,
             "  energy within 5 deg of the horizon  {:.4}",

@@ -17,7 +17,7 @@ use clap::{Parser, Subcommand};
 use vastocean::app;
 use vastocean::config::Choice;
 
-use crate::emit;
+use crate::{emit, emit_remarked};
 
 #[derive(Parser)]
 #[command(
@@ -88,36 +88,130 @@ enum Command {
     /// Embree smoke run: build a BVH over a wavy grid and trace random rays down onto it.
     #[cfg(feature = "embree")]
     Smoke(embree::SmokeArgs),
+    /// Print a shell completion script, e.g. `vastocean completions bash >
+    /// ~/.local/share/bash-completion/completions/vastocean`.
+    Completions {
+        /// The shell.
+        shell: clap_complete::Shell,
+    },
+    /// Write man pages, one per command (vastocean.1, vastocean-render.1, ...), into a folder;
+    /// `man -l DIR/vastocean.1` reads one without installing it.
+    Man {
+        /// Folder for the pages (created if missing).
+        #[arg(long)]
+        out: std::path::PathBuf,
+    },
 }
 
 pub fn run(cli: Cli) -> Result<()> {
-    match cli.command {
+    let given = match &cli.command {
+        Command::Render(a) => a.given(),
+        Command::Compare(a) => a.given(),
+        _ => Vec::new(),
+    };
+    run_command(cli.command).map_err(|e| name_flags(e, &given))
+}
+
+/// Bad input about a scene key that a flag set names the flag the user typed, with the key
+/// beside it for scene files: `--width (camera.width) must be in 2..=65536 (got 1)`. Other
+/// errors pass unchanged.
+pub fn name_flags(e: anyhow::Error, given: &[(&str, &str)]) -> anyhow::Error {
+    let input = e
+        .downcast_ref::<app::AppError>()
+        .is_some_and(|a| a.exit_code() == 2);
+    if !input || given.is_empty() {
+        return e;
+    }
+    let mut msg = e.to_string();
+    for cause in e.chain().skip(1) {
+        msg.push_str(&format!(": {cause}"));
+    }
+    let mut renamed = false;
+    for (key, flag) in given {
+        let mut out = String::with_capacity(msg.len());
+        let mut rest = msg.as_str();
+        while let Some(at) = rest.find(key) {
+            let after = &rest[at + key.len()..];
+            let before_ok =
+                !rest[..at].ends_with(|c: char| c.is_alphanumeric() || c == '_' || c == '.');
+            let after_ok =
+                !after.starts_with(|c: char| c.is_alphanumeric() || c == '_' || c == '.');
+            out.push_str(&rest[..at]);
+            if before_ok && after_ok {
+                out.push_str(&format!("{flag} ({key})"));
+                renamed = true;
+            } else {
+                out.push_str(key);
+            }
+            rest = after;
+        }
+        out.push_str(rest);
+        msg = out;
+    }
+    if renamed { BadInput(msg).into() } else { e }
+}
+
+fn run_command(command: Command) -> Result<()> {
+    match command {
         Command::Info { threads, json } => emit(&app::info::run(threads)?, json),
         Command::Bench(c) => bench::run(c),
+        Command::Render(a) if a.dump_config => {
+            let scene = a.job()?.scene;
+            scene.validate().map_err(app::AppError::from)?;
+            let text = scene.to_toml().map_err(|e| app::AppError::Run(e.into()))?;
+            print!("{text}");
+            Ok(())
+        }
         Command::Render(a) => match a.frames {
-            Some(frames) => emit(&app::frames::run(&a.frames_job(frames)?)?, a.json),
-            None => emit(&app::render::run(&a.job()?)?, a.json),
+            Some(frames) => emit_remarked(&app::frames::run(&a.frames_job(frames)?)?, a.json),
+            None => emit_remarked(&app::render::run(&a.job()?)?, a.json),
         },
-        Command::Merge(a) => emit(&app::passes::Merged(app::passes::merge(&a.job())?), a.json),
+        Command::Merge(a) => {
+            emit_remarked(&app::passes::Merged(app::passes::merge(&a.job())?), a.json)
+        }
         Command::Compare(a) if a.realizations > 1 => emit(
             &app::compare::realizations::run(&a.job()?, a.realizations.into())?,
             a.json,
         ),
-        Command::Compare(a) => emit(&app::compare::run(&a.job()?)?, a.json),
+        Command::Compare(a) => emit_remarked(&app::compare::run(&a.job()?)?, a.json),
         #[cfg(feature = "embree")]
         Command::Crosscheck(a) => embree::crosscheck(a),
         Command::Mesh(a) => emit(&app::mesh::run(&a.job())?, a.json),
-        Command::Ocean(a) => {
-            let r = app::ocean::run(&a.job())?;
-            r.warnings().iter().for_each(|w| eprintln!("warning: {w}"));
-            emit(&r, a.json)
-        }
+        Command::Ocean(a) => emit_remarked(&app::ocean::run(&a.job())?, a.json),
         Command::Sky(c) => sky::run(c),
         Command::Study(c) => study::run(c),
         Command::Stress(a) => stress::stress(a),
         #[cfg(feature = "embree")]
         Command::Smoke(a) => emit(&app::smoke::run(&a.job())?, a.json),
+        Command::Completions { shell } => {
+            // Into a buffer first: clap_complete panics on a write error, and a reader that
+            // stops early (`| head`) is not a failure.
+            let mut cmd = <Cli as clap::CommandFactory>::command();
+            let mut script = Vec::new();
+            clap_complete::generate(shell, &mut cmd, "vastocean", &mut script);
+            std::io::Write::write_all(&mut std::io::stdout().lock(), &script)?;
+            Ok(())
+        }
+        Command::Man { out } => write_man_pages(&out),
     }
+}
+
+/// Writes a man page for the program and one for each command (`vastocean-sky-generate.1` for
+/// `vastocean sky generate`) into `out`.
+fn write_man_pages(out: &std::path::Path) -> Result<()> {
+    vastocean::app::check_output_dir(out)?;
+    let cmd = <Cli as clap::CommandFactory>::command();
+    clap_mangen::generate_to(cmd, out).map_err(|e| app::AppError::Run(e.into()))?;
+    let pages = std::fs::read_dir(out)?
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().extension().is_some_and(|x| x == "1"))
+        .count();
+    println!(
+        "wrote {pages} man pages to {} (read one with `man -l {}`)",
+        out.display(),
+        out.join("vastocean.1").display()
+    );
+    Ok(())
 }
 
 /// Parses `--threads` and bounds it (see [`vastocean::config::max_threads`]).

@@ -22,7 +22,7 @@ pub struct OceanArgs {
     #[arg(long)]
     rms: Option<f64>,
     /// Layers as SIZE_M:N pairs, coarsest first, e.g. 400:512,47.3:512,5.83:256.
-    #[arg(long, value_parser = parse_layers)]
+    #[arg(long, value_parser = parse_layers, allow_hyphen_values = true)]
     layers: Option<Layers>,
     /// How the layers share the wavenumbers: overlap (each band in several layers, so the sum
     /// does not tile) or disjoint (each layer its own band; the scheme before issue 17).
@@ -53,7 +53,7 @@ pub struct OceanArgs {
     png_extent: Option<f64>,
     /// Sample the surface along a line X0,Z0,X1,Z1,N (world metres, N points) into --csv: x, z,
     /// h, Dx, Dz and the normal, to check the repeat correlation independently.
-    #[arg(long, value_parser = parse_profile, requires = "csv")]
+    #[arg(long, value_parser = parse_profile, requires = "csv", allow_hyphen_values = true)]
     profile: Option<([f64; 2], [f64; 2], usize)>,
     /// Where --profile writes its CSV.
     #[arg(long, requires = "profile")]

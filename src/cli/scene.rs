@@ -12,7 +12,8 @@ use super::{BadInput, choice};
 /// changed on the command line, which override it.
 #[derive(clap::Args)]
 pub struct SceneFlags {
-    /// Scene file (TOML); the flags below override it. Without one, the default scene.
+    /// Scene file (TOML; `-` reads it from stdin, its paths relative to the working directory);
+    /// the flags below override it. Without one, the default scene (docs/scene-file.md).
     #[arg(long)]
     config: Option<PathBuf>,
     /// Wind speed at 10 m, m/s.
@@ -61,6 +62,36 @@ pub struct SceneFlags {
 }
 
 impl SceneFlags {
+    /// The scene keys these flags set, each with its flag: errors about a key that a flag set
+    /// name the flag ([`super::name_flags`]).
+    pub fn given(&self) -> Vec<(&'static str, &'static str)> {
+        let set = [
+            (self.wind.is_some(), "ocean.wind_speed", "--wind"),
+            (self.fetch.is_some(), "ocean.fetch_km", "--fetch"),
+            (self.depth.is_some(), "ocean.depth_m", "--depth"),
+            (self.rms.is_some(), "ocean.rms_m", "--rms"),
+            (
+                self.spreading_cap.is_some(),
+                "ocean.spreading_cap",
+                "--spreading-cap",
+            ),
+            (self.sky.is_some(), "sky.file", "--sky"),
+            (self.width.is_some(), "camera.width", "--width"),
+            (self.spp.is_some(), "render.spp", "--spp"),
+            (self.seed.is_some(), "render.seed", "--seed"),
+            (
+                self.camera_height.is_some(),
+                "camera.height_m",
+                "--camera-height",
+            ),
+            (self.threads.is_some(), "render.threads", "--threads"),
+        ];
+        set.into_iter()
+            .filter(|(given, ..)| *given)
+            .map(|(_, key, flag)| (key, flag))
+            .collect()
+    }
+
     /// The scene file (or the default scene) with the flags applied.
     fn scene(&self) -> Result<SceneConfig> {
         let mut s = match &self.config {
@@ -125,11 +156,15 @@ pub struct RenderArgs {
     /// Render an animation: ocean times START:END:STEP in seconds (e.g. 0:2:0.04), into
     /// PREFIX.0001.exr/.png ... and one PREFIX.json for the sequence; each frame after the first
     /// moves the vertices and refits the BVH instead of rebuilding (README "Animation").
-    #[arg(long, value_parser = vastocean::app::frames::parse_frames)]
+    #[arg(long, value_parser = vastocean::app::frames::parse_frames, allow_hyphen_values = true)]
     pub frames: Option<vastocean::app::frames::FrameRange>,
     /// Print the JSON sidecar on stdout.
     #[arg(long)]
     pub json: bool,
+    /// Print the scene this command would render, the file and every flag applied and checked,
+    /// as TOML that `--config` reads back; render nothing.
+    #[arg(long, conflicts_with_all = ["json", "pass", "frames"])]
+    pub dump_config: bool,
 }
 
 /// `merge`: pass files into one render.
@@ -156,6 +191,15 @@ impl MergeArgs {
 }
 
 impl RenderArgs {
+    /// The scene keys the flags set, each with its flag (see [`SceneFlags::given`]).
+    pub fn given(&self) -> Vec<(&'static str, &'static str)> {
+        let mut g = self.scene.given();
+        if self.band.is_some() {
+            g.push(("camera.projection.band_deg", "--band"));
+        }
+        g
+    }
+
     /// The animation job of `--frames`.
     pub fn frames_job(&self, frames: app::frames::FrameRange) -> Result<app::frames::FramesJob> {
         let r = self.job()?;
@@ -224,6 +268,15 @@ pub struct CompareArgs {
 }
 
 impl CompareArgs {
+    /// The scene keys the flags set, each with its flag (see [`SceneFlags::given`]).
+    pub fn given(&self) -> Vec<(&'static str, &'static str)> {
+        let mut g = self.scene.given();
+        if self.band.is_some() {
+            g.push(("camera.projection.band_deg", "--band"));
+        }
+        g
+    }
+
     pub fn job(&self) -> Result<app::compare::CompareJob> {
         let mut scene = self.scene.scene()?;
         let band = match (self.band, scene.camera.projection) {

@@ -46,7 +46,23 @@ pub(crate) fn invalid(field: &str, requirement: &str, got: impl std::fmt::Displa
     ConfigError::Invalid {
         field: field.into(),
         requirement: requirement.into(),
-        got: got.to_string(),
+        got: compact_number(got.to_string()),
+    }
+}
+
+/// A number as a person reads it in a message: `1e300` and `1e-9`, not the 301 digits or the
+/// nine zeros that Rust's `Display` of an f64 prints. Text that is not one number passes as is.
+pub fn compact_number(text: String) -> String {
+    match text.parse::<f64>() {
+        Ok(v) if v.is_finite() && text.len() > 8 => {
+            let short = format!("{v:e}");
+            if 2 * short.len() < text.len() {
+                short
+            } else {
+                text
+            }
+        }
+        _ => text,
     }
 }
 
@@ -160,22 +176,45 @@ pub struct SceneConfig {
 }
 
 impl SceneConfig {
-    /// Reads a TOML scene; a relative sky file is resolved against the file's folder.
+    /// Reads a TOML scene (`-`: from stdin); a relative sky file is resolved against the file's
+    /// folder (stdin's: the working directory).
     pub fn load(path: &Path) -> Result<SceneConfig, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+        let from_stdin = path == Path::new("-");
+        let text = if from_stdin {
+            std::io::read_to_string(std::io::stdin())
+        } else {
+            std::fs::read_to_string(path)
+        }
+        .map_err(|source| ConfigError::Read {
             path: path.into(),
             source,
         })?;
+        let shown = if from_stdin {
+            Path::new("<stdin>")
+        } else {
+            path
+        };
         let mut cfg: SceneConfig = toml::from_str(&text).map_err(|e| ConfigError::Parse {
-            path: path.into(),
+            path: shown.into(),
             message: e.to_string(),
         })?;
-        if let (Some(f), Some(dir)) = (&cfg.sky.file, path.parent())
+        // A file's relative paths are relative to the file; stdin's to the working directory.
+        if let (Some(f), Some(dir), false) = (&cfg.sky.file, path.parent(), from_stdin)
             && f.is_relative()
         {
             cfg.sky.file = Some(dir.join(f));
         }
         Ok(cfg)
+    }
+
+    /// The scene as TOML that [`SceneConfig::load`] reads back to the same scene from any
+    /// folder: every key written out, the sky map's path made absolute.
+    pub fn to_toml(&self) -> Result<String, toml::ser::Error> {
+        let mut c = self.clone();
+        if let Some(f) = &c.sky.file {
+            c.sky.file = Some(std::path::absolute(f).unwrap_or_else(|_| f.clone()));
+        }
+        toml::to_string(&c)
     }
 
     /// Checks every section field by field; the first problem is returned with its field name.
@@ -328,6 +367,17 @@ impl SkyConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn numbers_in_messages_are_compact() {
+        assert_eq!(compact_number(1e300.to_string()), "1e300");
+        assert_eq!(compact_number(1e-9.to_string()), "1e-9");
+        assert_eq!(compact_number(0.225.to_string()), "0.225");
+        assert_eq!(compact_number(123456789.0.to_string()), "123456789");
+        assert_eq!(compact_number("(5, 9)".into()), "(5, 9)");
+        let e = invalid("ocean.rms_m", "at most 25", 1e300);
+        assert!(e.to_string().ends_with("(got 1e300)"), "{e}");
+    }
 
     #[test]
     fn defaults_are_valid_and_round_trip_through_toml() {

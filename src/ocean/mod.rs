@@ -44,7 +44,7 @@ impl OceanError {
         OceanError::Invalid {
             field: field.into(),
             requirement: requirement.into(),
-            got: got.to_string(),
+            got: crate::config::compact_number(got.to_string()),
         }
     }
 }

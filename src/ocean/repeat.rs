@@ -250,7 +250,7 @@ mod tests {
     }
 
     #[test]
-    fn validity_warnings_flag_the_paper_cases_and_not_a_young_sea() {
+    fn range_notes_flag_the_paper_cases_and_not_a_young_sea() {
         use crate::ocean::Spectrum;
         // Table 1, case 87: g F / U^2 = 4.4e5, Mitsuyasu's s at the peak 254.
         let case87 = OceanParams {
@@ -262,7 +262,7 @@ mod tests {
         let s = Spectrum::new(&case87);
         assert!((s.dimensionless_fetch().unwrap() / 4.376e5 - 1.0).abs() < 1e-3);
         assert!((s.peak_spreading_exponent().unwrap() - 254.0).abs() < 1.0);
-        assert_eq!(s.validity_warnings().len(), 2);
+        assert_eq!(s.range_notes().len(), 2);
         // the cap: the surface spreads as cos^2s with s = 75 at the peak, and only the fetch
         // warning stays
         let capped = Spectrum::new(&OceanParams {
@@ -274,12 +274,12 @@ mod tests {
         assert_eq!(capped.spreading_at(w, t), d(t, 75.0));
         assert!((s.spreading_at(w, t) - d(t, 254.0)).abs() < 0.05 * d(t, 254.0));
         assert!(capped.spreading_at(w, t) > 1.5 * s.spreading_at(w, t));
-        assert_eq!(capped.validity_warnings().len(), 1);
+        assert_eq!(capped.range_notes().len(), 1);
         let young = OceanParams {
             wind_speed: 10.0,
             fetch_km: 10.0,
             ..OceanParams::default()
         };
-        assert!(Spectrum::new(&young).validity_warnings().is_empty());
+        assert!(Spectrum::new(&young).range_notes().is_empty());
     }
 }

@@ -243,17 +243,18 @@ impl Spectrum {
             .then(|| mitsuyasu_s(self.omega_p, self.omega_p, self.wind_speed))
     }
 
-    /// Where the inputs leave the models' range: a fetch past full development (g F / U^2 >
-    /// [`FULLY_DEVELOPED_FETCH`], where the JONSWAP peak would fall below Pierson-Moskowitz's
-    /// 0.855 g / U) and a spreading exponent at the peak above [`MAX_PEAK_SPREADING`] (Goda's
-    /// largest, for long-travelled swell; wind seas are near 10).
-    pub fn validity_warnings(&self) -> Vec<String> {
+    /// Where the inputs leave the range the spectrum's models were fitted on, as short clauses
+    /// for one note: a fetch past full development (g F / U^2 > [`FULLY_DEVELOPED_FETCH`], where
+    /// the JONSWAP peak falls below Pierson-Moskowitz's 0.855 g / U) and a spreading exponent at
+    /// the peak above [`MAX_PEAK_SPREADING`] (Goda's largest, for long-travelled swell; wind seas
+    /// are near 10). The surface is still valid there: the models extrapolate.
+    pub fn range_notes(&self) -> Vec<String> {
         let mut w = Vec::new();
         if let Some(f) = self.dimensionless_fetch()
             && f > FULLY_DEVELOPED_FETCH
         {
             w.push(format!(
-                "the dimensionless fetch g F / U^2 = {f:.3e} is past full development ({FULLY_DEVELOPED_FETCH:.3e}): JONSWAP's fetch laws put the peak at omega_p U / g = {:.2}, below the fully developed 0.855",
+                "the fetch is past full development (g F / U^2 = {f:.3e} > {FULLY_DEVELOPED_FETCH:.3e}), so JONSWAP's fetch law puts the peak at omega_p U / g = {:.2}, below the fully developed 0.855",
                 self.omega_p * self.wind_speed / G
             ));
         }
@@ -261,7 +262,7 @@ impl Spectrum {
             && s.min(self.spreading_cap) > MAX_PEAK_SPREADING
         {
             w.push(format!(
-                "Mitsuyasu's spreading exponent at the peak is {s:.0}, above {MAX_PEAK_SPREADING:.0} (Goda's value for long-travelled swell): the waves are nearly unidirectional, long-crested; spreading_cap = {MAX_PEAK_SPREADING:.0} (--spreading-cap) caps it"
+                "the waves are nearly long-crested (Mitsuyasu's spreading exponent at the peak is {s:.0}, above Goda's {MAX_PEAK_SPREADING:.0} for long-travelled swell; --spreading-cap {MAX_PEAK_SPREADING:.0} caps it)"
             ));
         }
         w

@@ -292,10 +292,22 @@ impl Surface {
         let mut amplitude_scale = 1.0;
         if let Some(target) = params.rms_m {
             if variance.is_nan() || variance <= 0.0 {
+                // The sea state, not the RMS target, is what is wrong: a wind too light or a
+                // fetch too short puts the spectrum's peak far below the finest texels.
+                let peak_m = 2.0 * std::f64::consts::PI * crate::ocean::spectrum::G
+                    / (spectrum.omega_p * spectrum.omega_p);
+                let finest_m = params
+                    .layers
+                    .iter()
+                    .map(|l| 2.0 * l.size_m / l.n as f64)
+                    .fold(f64::INFINITY, f64::min);
                 return Err(OceanError::invalid(
-                    "ocean.rms_m",
-                    "reachable, but the layers' bands hold no wave energy for this sea state",
-                    target,
+                    "ocean.wind_speed",
+                    format!(
+                        "strong enough, over ocean.fetch_km = {}, to put wave energy into the layers' bands (the spectrum peaks at a wavelength of {peak_m:.3e} m, the finest layer resolves {finest_m:.3} m; raise the wind or the fetch, or add a finer layer)",
+                        params.fetch_km
+                    ),
+                    params.wind_speed,
                 ));
             }
             amplitude_scale = target / variance.sqrt();

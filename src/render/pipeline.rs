@@ -181,11 +181,11 @@ pub struct RenderReport {
     pub escaped_below_horizon: u64,
     /// Rays spawned at a hit that met their own triangle again. Should be 0.
     pub self_hits: u64,
-    /// The sea state's inputs outside the models' range (see
-    /// `crate::ocean::Spectrum::validity_warnings`).
-    #[serde(default)]
-    pub ocean_warnings: Vec<String>,
-    /// Things worth knowing about the render (the ocean's warnings, folding, holes), also printed.
+    /// Where the sea state lies outside the range the spectrum's models were fitted on (see
+    /// `crate::ocean::Spectrum::range_notes`): printed as one note, the render is valid.
+    #[serde(default, alias = "ocean_warnings")]
+    pub ocean_notes: Vec<String>,
+    /// What may be wrong with the render (folding, holes), printed on stderr.
     pub warnings: Vec<String>,
     /// Rays the backend refused for a NaN or infinite origin or direction (answered as misses).
     pub rejected_rays: u64,
@@ -527,11 +527,11 @@ impl Prepared {
         }
         let seconds_normal_map = c.normal_map_thread_seconds() / self.threads as f64;
         let folded_fraction = self.ocean.summary().folded_fraction;
-        let ocean_warnings = self
+        let ocean_notes = self
             .ocean
             .spectrum()
-            .map_or_else(Vec::new, |s| s.validity_warnings());
-        let warnings = warnings(&ocean_warnings, folded_fraction, c.escaped_below_horizon);
+            .map_or_else(Vec::new, |s| s.range_notes());
+        let warnings = warnings(folded_fraction, c.escaped_below_horizon);
         let mesh = self.accel.mesh();
         let seconds_build = self.seconds_build;
         let report = RenderReport {
@@ -565,7 +565,7 @@ impl Prepared {
             folded_fraction,
             escaped_below_horizon: c.escaped_below_horizon,
             self_hits: c.self_hits,
-            ocean_warnings,
+            ocean_notes,
             warnings,
             rejected_rays: self.accel.rejected_rays(),
             wrong_side_count: c.wrong_side,
@@ -598,8 +598,8 @@ impl Prepared {
 }
 
 /// What a render warns of: the sea state's validity, folding and holes.
-pub fn warnings(ocean: &[String], folded_fraction: f64, escaped_below_horizon: u64) -> Vec<String> {
-    let mut w = ocean.to_vec();
+pub fn warnings(folded_fraction: f64, escaped_below_horizon: u64) -> Vec<String> {
+    let mut w = Vec::new();
     if folded_fraction > 0.0 {
         w.push(format!(
             "{:.3}% of the sea surface folds over itself (Jacobian <= 0); lower ocean.choppiness to avoid it",

@@ -19,9 +19,12 @@ pub struct SkyInfo {
     pub mean_radiance: f64,
     /// Largest texel luminance.
     pub peak_radiance: f64,
-    /// Direction of the brightest region of the upper hemisphere.
-    pub sun_elevation_deg: f64,
-    pub sun_azimuth_deg: f64,
+    /// Direction of the sun: the brightest region of the upper hemisphere, when it is a sun
+    /// ([`find_sun`]); `None` (null in JSON) for a sky without one, such as an overcast sky.
+    pub sun_elevation_deg: Option<f64>,
+    pub sun_azimuth_deg: Option<f64>,
+    /// The brightest region's peak luminance over the upper hemisphere's median luminance.
+    pub sun_contrast: f64,
     /// Share of the sphere's solid-angle weighted luminance within 5 degrees above or below the
     /// horizon.
     pub horizon_energy_fraction: f64,
@@ -47,14 +50,17 @@ pub fn info(img: &RgbImage) -> SkyInfo {
             }
         }
     }
-    let (el, az) = find_sun(img);
+    let region = brightest_region(img);
+    let sun =
+        (region.contrast >= SUN_CONTRAST).then_some((region.elevation_deg, region.azimuth_deg));
     SkyInfo {
         width: w,
         height: h,
         mean_radiance: total / omega,
         peak_radiance: peak,
-        sun_elevation_deg: el,
-        sun_azimuth_deg: az,
+        sun_elevation_deg: sun.map(|s| s.0),
+        sun_azimuth_deg: sun.map(|s| s.1),
+        sun_contrast: region.contrast,
         horizon_energy_fraction: if total > 0.0 { band / total } else { 0.0 },
     }
 }
@@ -72,10 +78,33 @@ fn blur_row(row: &[f64], r: usize) -> Vec<f64> {
     out
 }
 
-/// (elevation, azimuth) in degrees of the brightest region above the horizon: the maximum of
-/// the luminance blurred over about a degree (a single hot texel does not win over the sun),
-/// refined by the luminance-weighted centroid of the bright texels around it.
-pub fn find_sun(img: &RgbImage) -> (f64, f64) {
+/// How much brighter than the median sky above the horizon the brightest region must peak to be
+/// called a sun. A CIE overcast sky peaks at about 3x its median (zenith against horizon), a clear
+/// sky's sun at thousands, and a photographed sun clipped as `study plan --clip-sun` does at its
+/// factor (100 by default).
+pub const SUN_CONTRAST: f64 = 10.0;
+
+/// The brightest region of the upper hemisphere: where, and how much brighter than the median.
+#[derive(Clone, Copy, Debug)]
+pub struct BrightRegion {
+    pub elevation_deg: f64,
+    pub azimuth_deg: f64,
+    /// Peak luminance in the region over the median luminance of the upper hemisphere's texels
+    /// (infinite for a black sky with a bright spot, 1 for a uniform sky).
+    pub contrast: f64,
+}
+
+/// (elevation, azimuth) in degrees of the sun, or `None` if the brightest region is not one (its
+/// contrast is below [`SUN_CONTRAST`], as in an overcast or uniform sky).
+pub fn find_sun(img: &RgbImage) -> Option<(f64, f64)> {
+    let r = brightest_region(img);
+    (r.contrast >= SUN_CONTRAST).then_some((r.elevation_deg, r.azimuth_deg))
+}
+
+/// The brightest region above the horizon: the maximum of the luminance blurred over about a
+/// degree (a single hot texel does not win over the sun), refined by the luminance-weighted
+/// centroid of the bright texels around it.
+pub fn brightest_region(img: &RgbImage) -> BrightRegion {
     let (w, h) = (img.width, img.height);
     let rows = h / 2;
     let ry = (h / 180).max(1);
@@ -125,10 +154,14 @@ pub fn find_sun(img: &RgbImage) -> (f64, f64) {
     let d = sum
         .try_normalize()
         .unwrap_or_else(|| direction(row_elevation(at.0, h), column_azimuth(at.1, w)));
-    (
-        d.y.clamp(-1.0, 1.0).asin().to_degrees(),
-        d.z.atan2(d.x).to_degrees().rem_euclid(360.0),
-    )
+    let mut all: Vec<f64> = lum.iter().flatten().copied().collect();
+    let mid = all.len() / 2;
+    let median = *all.select_nth_unstable_by(mid, f64::total_cmp).1;
+    BrightRegion {
+        elevation_deg: d.y.clamp(-1.0, 1.0).asin().to_degrees(),
+        azimuth_deg: d.z.atan2(d.x).to_degrees().rem_euclid(360.0),
+        contrast: if max == median { 1.0 } else { max / median },
+    }
 }
 
 /// How `sky import` treats the part of a photograph below the horizon.
@@ -241,10 +274,11 @@ pub fn rotate_azimuth(img: &mut RgbImage, degrees: f64) -> f64 {
     shift as f64 * 360.0 / w as f64
 }
 
-/// Rotates the map so that its sun ([`find_sun`]) lands at `azimuth_deg`; returns the rotation.
-pub fn rotate_sun_to(img: &mut RgbImage, azimuth_deg: f64) -> f64 {
-    let (_, az) = find_sun(img);
-    rotate_azimuth(img, azimuth_deg - az)
+/// Rotates the map so that its sun ([`find_sun`]) lands at `azimuth_deg`; returns the rotation,
+/// or `None` (the map untouched) if the map has no sun.
+pub fn rotate_sun_to(img: &mut RgbImage, azimuth_deg: f64) -> Option<f64> {
+    let (_, az) = find_sun(img)?;
+    Some(rotate_azimuth(img, azimuth_deg - az))
 }
 
 /// An sRGB contact sheet: each map tone-mapped with its own auto exposure, scaled to
@@ -316,5 +350,35 @@ mod tests {
         assert_eq!(img.pixels[3], [1.0; 3]);
         rotate_azimuth(&mut img, -90.0);
         assert_eq!(img.pixels[1], [1.0; 3]);
+    }
+
+    #[test]
+    fn only_a_sky_with_a_distinct_bright_region_has_a_sun() {
+        use crate::sky::procedural::{SkyKind, SkyParams, generate};
+        let mut uniform = RgbImage::new(64, 32);
+        uniform.pixels.iter_mut().for_each(|p| *p = [1.0; 3]);
+        assert_eq!(find_sun(&uniform), None);
+        assert_eq!(brightest_region(&uniform).contrast, 1.0);
+        let sky = |kind| {
+            let p = SkyParams {
+                kind,
+                sun_elevation_deg: 30.0,
+                sun_azimuth_deg: 90.0,
+                ..SkyParams::default()
+            };
+            generate(&p, 256).unwrap()
+        };
+        let overcast = sky(SkyKind::Overcast);
+        let r = brightest_region(&overcast);
+        assert!(r.contrast > 1.0 && r.contrast < SUN_CONTRAST, "{r:?}");
+        assert_eq!(find_sun(&overcast), None);
+        let (el, az) = find_sun(&sky(SkyKind::Clear)).expect("a clear sky has a sun");
+        assert!(
+            (el - 30.0).abs() < 2.0 && (az - 90.0).abs() < 2.0,
+            "{el} {az}"
+        );
+        let mut turned = overcast.clone();
+        assert_eq!(rotate_sun_to(&mut turned, 10.0), None);
+        assert_eq!(turned.pixels, overcast.pixels);
     }
 }

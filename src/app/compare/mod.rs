@@ -239,7 +239,7 @@ fn render_scenarios(
         with_lod(&job.scene, &job.high),
         with_lod(&job.scene, &job.low),
     );
-    say(format!("low tessellation ({:?})", job.low.preset));
+    say(format!("low tessellation ({})", job.low.preset));
     let low = prepare(&low_cfg)?;
     let mut pilots = Vec::new();
     let pilot = |prepared: &Prepared, cfg: &SceneConfig, sc: Scenario| {
@@ -257,7 +257,7 @@ fn render_scenarios(
         }
     }
     let mut seconds_pilot = t.elapsed().as_secs_f64();
-    say(format!("high tessellation ({:?})", job.high.preset));
+    say(format!("high tessellation ({})", job.high.preset));
     let high = prepare(&high_cfg)?;
     let camera = crate::render::Camera::new(
         job.scene.camera.projection,
@@ -291,7 +291,7 @@ fn render_scenarios(
             let rep = &r.report;
             let info = ScenarioInfo {
                 name: sc,
-                tessellation: format!("{:?} ({} triangles)", lod.preset, rep.triangles),
+                tessellation: format!("{} ({} triangles)", lod.preset, rep.triangles),
                 normals: sc.normals(),
                 seed: c.render.seed,
                 triangles: rep.triangles,

@@ -87,6 +87,34 @@ pub(super) fn ratio(i: &Interval) -> String {
     format!("{} [{}, {}]", num(i.value), num(i.ci[0]), num(i.ci[1]))
 }
 
+impl crate::app::Remarks for CompareSummary {
+    fn notes(&self) -> Vec<String> {
+        let mut n = Vec::new();
+        if self.baseline_noise_share > super::BASELINE_NOISE_SHARE {
+            n.push(format!(
+                "the baseline's own noise ({:.2e}) is {:.0}% of the smallest difference it ranks (more than {:.0}%): the estimates stay unbiased, their intervals are wide; more --spp narrows them",
+                self.baseline_noise,
+                100.0 * self.baseline_noise_share,
+                100.0 * super::BASELINE_NOISE_SHARE
+            ));
+        }
+        n
+    }
+    fn warnings(&self) -> Vec<String> {
+        let check = &self.noise_model_check;
+        let mut w = Vec::new();
+        if check.ci[1] < NOISE_CHECK_RANGE.0 || check.ci[0] > NOISE_CHECK_RANGE.1 {
+            w.push(format!(
+                "the noise floor's measured / predicted variance is {} [{}, {}], well away from 1: the noise estimate is unreliable here (heavy-tailed samples, usually a bright sun's glint); trust the summary without glint rows, clip the sun or render more samples",
+                num(check.value),
+                num(check.ci[0]),
+                num(check.ci[1])
+            ));
+        }
+        w
+    }
+}
+
 impl fmt::Display for CompareSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let ci = |i: &Interval| format!("{:.5} [{:.5}, {:.5}]", i.value, i.ci[0], i.ci[1]);
@@ -177,25 +205,6 @@ impl fmt::Display for CompareSummary {
                 self.rows,
                 rows.join(", "),
                 ratio(&r.without_glint)
-            )?;
-        }
-        if self.baseline_noise_share > super::BASELINE_NOISE_SHARE {
-            writeln!(
-                f,
-                "  note: the baseline's own noise ({:.2e}) is {:.0}% of the smallest difference it ranks (more than {:.0}%): the estimates stay unbiased, their intervals are wide; more --spp narrows them",
-                self.baseline_noise,
-                100.0 * self.baseline_noise_share,
-                100.0 * super::BASELINE_NOISE_SHARE
-            )?;
-        }
-        let check = &self.noise_model_check;
-        if check.ci[1] < NOISE_CHECK_RANGE.0 || check.ci[0] > NOISE_CHECK_RANGE.1 {
-            writeln!(
-                f,
-                "  warning: the noise floor's measured / predicted variance is {} [{}, {}], well away from 1: the noise estimate is unreliable here (heavy-tailed samples, usually a bright sun's glint); trust the summary without glint rows, clip the sun or render more samples",
-                num(check.value),
-                num(check.ci[0]),
-                num(check.ci[1])
             )?;
         }
         for sc in &self.scenarios {

@@ -177,6 +177,12 @@ pub fn plan(job: &PlanJob) -> Result<PlanReport, AppError> {
             job.skies_dir.display()
         )));
     }
+    // Every map is read whole before anything is written: a corrupt one fails the plan, not
+    // the cases that draw it.
+    for name in &skies {
+        crate::sky::Sky::load(&job.skies_dir.join(name))
+            .map_err(|e| AppError::Input(format!("sky map {name}: {e}").into()))?;
+    }
     let mut scenes = Vec::new();
     for k in 1..=job.cases {
         let (s, sky) = draw_case(job, &skies, k);

@@ -93,7 +93,8 @@ fn sun_elevation(scene: &SceneConfig) -> f64 {
         .file
         .as_ref()
         .and_then(|f| crate::image_io::read_exr(f).ok())
-        .map_or(f64::NAN, |img| crate::sky::tools::find_sun(&img).0)
+        .and_then(|img| crate::sky::tools::find_sun(&img))
+        .map_or(f64::NAN, |(el, _)| el)
 }
 
 /// An unbounded upper end is null in JSON.
