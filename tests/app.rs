@@ -378,7 +378,7 @@ fn study_plans_runs_through_gnu_parallel_resumes_and_summarizes() {
         case1
     );
 
-    // All three cases through GNU parallel, as `make study` and the README run them.
+    // All three cases through GNU parallel, as `make study` and docs/comparison.md run them.
     let status = std::process::Command::new("parallel")
         .args(["-j", "2", "--halt", "now,fail=1"])
         .arg(env!("CARGO_BIN_EXE_vastocean"))

@@ -2,6 +2,7 @@
 
 mod app;
 mod bvh;
+mod cli;
 mod common;
 mod defects;
 #[cfg(feature = "embree")]

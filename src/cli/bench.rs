@@ -1,4 +1,4 @@
-//! `bench accuracy` and `bench bvh`: the reports behind the README's speed and accuracy figures.
+//! `bench accuracy` and `bench bvh`: the reports behind docs/performance.md and docs/accuracy.md.
 
 use std::path::PathBuf;
 
@@ -28,6 +28,7 @@ pub enum BenchCommand {
         /// Worker threads (0 = all cores).
         #[arg(long, default_value_t = 0, value_parser = super::threads_arg)]
         threads: usize,
+        /// Print the result as one JSON object on stdout instead of the report.
         #[arg(long)]
         json: bool,
     },
@@ -44,6 +45,7 @@ pub enum BenchCommand {
         /// Worker threads (0 = all cores).
         #[arg(long, default_value_t = 0, value_parser = super::threads_arg)]
         threads: usize,
+        /// Print the result as one JSON object on stdout instead of the report.
         #[arg(long)]
         json: bool,
     },

@@ -32,6 +32,7 @@ pub struct CrosscheckArgs {
     /// Worker threads (0 = all cores).
     #[arg(long, default_value_t = 0, value_parser = super::threads_arg)]
     threads: usize,
+    /// Print the result as one JSON object on stdout instead of the report.
     #[arg(long)]
     pub json: bool,
 }
@@ -69,6 +70,7 @@ pub struct SmokeArgs {
     /// Threads for Embree and the tracer (0 = all cores).
     #[arg(long, default_value_t = 0, value_parser = super::threads_arg)]
     threads: usize,
+    /// Print the result as one JSON object on stdout instead of the report.
     #[arg(long)]
     pub json: bool,
 }

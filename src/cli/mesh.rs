@@ -34,7 +34,7 @@ pub struct MeshArgs {
     /// `square` (all directions) or `frustum:YAW_DEG:HFOV_DEG` (a perspective camera's view).
     #[arg(long, default_value = "square")]
     pattern: vastocean::config::Pattern,
-    /// How the paper's doubling rule is read (see the README).
+    /// How the paper's doubling rule is read (docs/scene-file.md, `lod.reading`).
     #[arg(long, value_parser = choice::<vastocean::config::Reading>())]
     reading: Option<vastocean::config::Reading>,
     /// Seed of the ocean sampled at every vertex (the default case-22 ocean).
@@ -46,6 +46,7 @@ pub struct MeshArgs {
     /// Write the mesh as binary PLY (positions, normals, texture coordinates).
     #[arg(long)]
     ply: Option<PathBuf>,
+    /// Print the result as one JSON object on stdout instead of the report.
     #[arg(long)]
     pub json: bool,
 }

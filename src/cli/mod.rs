@@ -50,6 +50,7 @@ enum Command {
         /// Threads Embree may use (0 = all cores).
         #[arg(long, default_value_t = 0, value_parser = crate::cli::threads_arg)]
         threads: usize,
+        /// Print the result as one JSON object on stdout instead of the report.
         #[arg(long)]
         json: bool,
     },
@@ -107,6 +108,7 @@ pub fn run(cli: Cli) -> Result<()> {
     let given = match &cli.command {
         Command::Render(a) => a.given(),
         Command::Compare(a) => a.given(),
+        Command::Ocean(a) => a.given(),
         _ => Vec::new(),
     };
     run_command(cli.command).map_err(|e| name_flags(e, &given))

@@ -25,7 +25,7 @@ pub struct OceanArgs {
     #[arg(long, value_parser = parse_layers, allow_hyphen_values = true)]
     layers: Option<Layers>,
     /// How the layers share the wavenumbers: overlap (each band in several layers, so the sum
-    /// does not tile) or disjoint (each layer its own band; the scheme before issue 17).
+    /// does not tile) or disjoint (each layer its own band, the earlier scheme).
     #[arg(long, value_parser = super::choice::<vastocean::ocean::Layering>(), default_value_t = OceanParams::default().layering)]
     layering: vastocean::ocean::Layering,
     /// Cap Mitsuyasu's spreading exponent (Goda: 10 wind sea, 25/75 short/long-travelled swell).
@@ -58,8 +58,25 @@ pub struct OceanArgs {
     /// Where --profile writes its CSV.
     #[arg(long, requires = "profile")]
     csv: Option<PathBuf>,
+    /// Print the result as one JSON object on stdout instead of the report.
     #[arg(long)]
     pub json: bool,
+}
+
+impl OceanArgs {
+    /// The sea-state keys these flags set, each with its flag (every one has a value here, typed
+    /// or default), so that errors name the flag ([`super::name_flags`]).
+    pub fn given(&self) -> Vec<(&'static str, &'static str)> {
+        vec![
+            ("ocean.wind_speed", "--wind"),
+            ("ocean.fetch_km", "--fetch"),
+            ("ocean.depth_m", "--depth"),
+            ("ocean.rms_m", "--rms"),
+            ("ocean.spreading_cap", "--spreading-cap"),
+            ("ocean.choppiness", "--choppiness"),
+            ("ocean.time_s", "--time"),
+        ]
+    }
 }
 
 /// A newtype so clap treats the whole list as one value.

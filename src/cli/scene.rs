@@ -28,7 +28,7 @@ pub struct SceneFlags {
     /// Scale the ocean to this RMS wave height, m.
     #[arg(long)]
     rms: Option<f64>,
-    /// How the ocean's layers share the wavenumbers (README "The ocean").
+    /// How the ocean's layers share the wavenumbers (docs/ocean.md).
     #[arg(long, value_parser = choice::<vastocean::ocean::Layering>())]
     layering: Option<vastocean::ocean::Layering>,
     /// Cap Mitsuyasu's spreading exponent (Goda: 10 wind sea, 25/75 short/long-travelled swell).
@@ -149,13 +149,13 @@ pub struct RenderArgs {
     #[arg(long, default_value = "out/render")]
     out: PathBuf,
     /// Render only pass K of N (1-based: the samples s = K-1 mod N of every pixel) into
-    /// PREFIX.pass; `vastocean merge` adds the passes up into the render (README "Rendering on
-    /// many machines").
+    /// PREFIX.pass; `vastocean merge` adds the passes up into the render
+    /// (docs/many-machines.md).
     #[arg(long, value_parser = vastocean::app::passes::parse_pass, conflicts_with = "frames")]
     pass: Option<(usize, usize)>,
     /// Render an animation: ocean times START:END:STEP in seconds (e.g. 0:2:0.04), into
     /// PREFIX.0001.exr/.png ... and one PREFIX.json for the sequence; each frame after the first
-    /// moves the vertices and refits the BVH instead of rebuilding (README "Animation").
+    /// moves the vertices and refits the BVH instead of rebuilding (docs/many-machines.md).
     #[arg(long, value_parser = vastocean::app::frames::parse_frames, allow_hyphen_values = true)]
     pub frames: Option<vastocean::app::frames::FrameRange>,
     /// Print the JSON sidecar on stdout.

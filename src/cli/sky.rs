@@ -34,6 +34,7 @@ pub enum SkyCommand {
         /// Map width, texels (height = width / 2), 16 to 16384.
         #[arg(long, default_value_t = 1024, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(16..=16384))]
         width: usize,
+        /// The sky map to write (EXR, half float).
         #[arg(long)]
         out: PathBuf,
     },
@@ -42,6 +43,7 @@ pub enum SkyCommand {
     Import {
         /// Equirectangular HDR photograph (EXR, horizon at the middle row).
         photo: PathBuf,
+        /// The sky map to write (EXR, half float), the ground below the horizon replaced.
         #[arg(long)]
         out: PathBuf,
         /// What to put below the horizon.
@@ -58,6 +60,7 @@ pub enum SkyCommand {
     Info {
         /// Equirectangular EXR sky map.
         file: PathBuf,
+        /// Print the result as one JSON object on stdout instead of the report.
         #[arg(long)]
         json: bool,
     },
@@ -72,6 +75,7 @@ pub enum SkyCommand {
         /// Thumbnails per row, 1 to 16.
         #[arg(long, default_value_t = 3, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=16))]
         columns: usize,
+        /// The contact sheet to write (PNG).
         #[arg(long)]
         out: PathBuf,
     },

@@ -65,6 +65,7 @@ pub enum StudyCommand {
         /// The sky collection to draw from.
         #[arg(long, default_value = "skies")]
         skies: PathBuf,
+        /// Print the result as one JSON object on stdout instead of the report.
         #[arg(long)]
         json: bool,
     },
@@ -85,6 +86,7 @@ pub enum StudyCommand {
         /// Worker threads per case (0 = all cores; with GNU parallel -j 2 on 2 cores, 1).
         #[arg(long, value_parser = super::threads_arg)]
         threads: Option<usize>,
+        /// Print the result as one JSON object on stdout instead of the report.
         #[arg(long)]
         json: bool,
     },
@@ -93,6 +95,7 @@ pub enum StudyCommand {
     Summarize {
         /// Study folder.
         dir: PathBuf,
+        /// Print the result as one JSON object on stdout instead of the report.
         #[arg(long)]
         json: bool,
     },

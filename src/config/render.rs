@@ -84,7 +84,7 @@ pub struct RenderConfig {
     pub wrong_side: WrongSide,
     /// Embree: build a compact BVH (`RTC_SCENE_FLAG_COMPACT`): paper-high's render peak 3.15 ->
     /// 2.22 GB and a 1.6x faster build, for 15-18 % slower traversal (3-5 % of a render);
-    /// false for the fastest tracing when memory allows (README "Performance").
+    /// false for the fastest tracing when memory allows (docs/performance.md).
     pub compact_bvh: bool,
 }
 

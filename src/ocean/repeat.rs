@@ -205,7 +205,7 @@ mod tests {
         assert!(r.max > 0.99, "{r:?}");
         assert_eq!(r.along_wind.lag_m, 400.0);
         assert_eq!(r.across_wind.lag_m, 400.0);
-        // The layers before issue 17 share the spectrum in disjoint bands: every wave longer
+        // The earlier default layers share the spectrum in disjoint bands: every wave longer
         // than a few metres lives in the 400 m layer alone, so the sum repeats every 400 m too.
         let before = Surface::new(&OceanParams::tiling_layers(), 1).unwrap();
         let r = repeat_correlation(&before.sampler([0.0, 0.0]), 0.0);

@@ -203,10 +203,10 @@ fn summed_layers_carry_the_spectrum_of_the_covered_band_in_both_schemes() {
 
 #[test]
 fn target_rms_is_hit() {
-    // The layers before issue 17 (fine grids): the interpolated surface has the target RMS.
+    // The earlier default layers (fine grids): the interpolated surface has the target RMS.
     // With the default overlapping layers the realization does too, but bilinear reads of the
     // 10.3 and 12.7 km layers (8-10 texels per peak wavelength) lose ~5 % of it between texels
-    // (README "The ocean").
+    // (docs/ocean.md).
     for (base, sampled_tolerance) in [
         (OceanParams::tiling_layers(), 0.01),
         (OceanParams::default(), 0.06),

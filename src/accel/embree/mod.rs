@@ -102,7 +102,7 @@ pub struct BuildOptions {
     pub quality: Quality,
     /// Smaller BVH nodes, somewhat slower traversal (`RTC_SCENE_FLAG_COMPACT`; the default:
     /// paper-high's render peak 3.15 -> 2.22 GB and its build 6.1 -> 4.6 s for 3-5 % slower
-    /// tracing, README "Performance").
+    /// tracing, docs/performance.md).
     pub compact: bool,
     /// Watertight traversal: a ray through a shared edge hits exactly one triangle.
     pub robust: bool,

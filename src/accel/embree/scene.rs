@@ -263,7 +263,7 @@ impl Accel for Scene {
 
     fn interpolate_uv(&self, hit: &Hit) -> [f32; 2] {
         // In Rust from the barycentrics: rtcInterpolate through the shim cost ~157
-        // instructions a hit (issue 16's callgrind), this a dozen. A foreign `Hit` must not
+        // instructions a hit (measured with callgrind), this a dozen. A foreign `Hit` must not
         // index outside the buffers.
         let m = &self.mesh;
         match m.indices().get(hit.prim as usize) {

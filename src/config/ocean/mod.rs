@@ -68,7 +68,7 @@ pub enum Layering {
     #[default]
     Overlap,
     /// Each layer holds its own band, which ends at half its Nyquist wavenumber where the next
-    /// begins (the scheme before issue 17; every wave longer than the second layer's band
+    /// begins (the earlier scheme; every wave longer than the second layer's band
     /// repeats with the coarsest layer's period).
     Disjoint,
 }
@@ -215,7 +215,7 @@ pub const BAND_SPLIT: f64 = 0.5;
 pub const MIN_BAND_START_FUNDAMENTALS: f64 = 2.0;
 
 impl OceanParams {
-    /// The layers before issue 17, kept for comparison: 400 / 47.3 / 5.83 m in disjoint bands
+    /// The earlier default layers, kept for comparison: 400 / 47.3 / 5.83 m in disjoint bands
     /// (every wave longer than ~3 m lives in the 400 m layer, so the sea repeats every 400 m).
     pub fn tiling_layers() -> OceanParams {
         OceanParams {
@@ -324,7 +324,7 @@ impl OceanParams {
                     return Err(invalid(
                         &format!("ocean.layers[{i}].size_m"),
                         &format!(
-                            "small enough that the layers leave no gap in |k|: its band starts at {start:.4} rad/m ({MIN_BAND_START_FUNDAMENTALS} fundamentals), the coarser layers' end at {reach:.4} rad/m"
+                            "large enough that the layers leave no gap in |k|: its band starts at {start:.4} rad/m ({MIN_BAND_START_FUNDAMENTALS} fundamentals), the coarser layers' end at {reach:.4} rad/m"
                         ),
                         l.size_m,
                     ));
@@ -452,7 +452,7 @@ mod tests {
         let e = p.validate().unwrap_err().to_string();
         assert!(
             e.starts_with(
-                "ocean.layers[2].size_m must be small enough that the layers leave no gap"
+                "ocean.layers[2].size_m must be large enough that the layers leave no gap"
             ),
             "{e}"
         );
