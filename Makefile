@@ -9,7 +9,7 @@ DEB_PKGS   := libembree-dev libclang-dev pkg-config gcc fonts-dejavu-core parall
 SUDO       := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 OUT        ?= out
 
-.PHONY: setup build run test test-full bench bench-report study lint embree4-check embree4-test clean
+.PHONY: setup build run test test-full bench bench-report study lint man embree4-check embree4-test debian13-test clean
 
 # Installs only the packages that are missing; apt-get update runs only when something is.
 setup:
@@ -44,14 +44,14 @@ test-full: test
 bench: setup
 	$(CARGO) bench
 
-# The two reports the README quotes, regenerated in full into benches/results/ (bvh: about 10
-# minutes on 2 cores; accuracy: see its summary.json for its own time). Nothing else may run
+# The two benchmark reports docs/performance.md and docs/accuracy.md quote, regenerated in full
+# into benches/results/ (each summary.json records its own run time). Nothing else may run
 # meanwhile: they time things.
 bench-report: build
 	./target/release/vastocean bench bvh --out benches/results/bvh
 	./target/release/vastocean bench accuracy --out benches/results/accuracy
 
-# The paper's study (README "Reproducing the paper's study"): plans STUDY if it has no plan
+# The paper's study (docs/comparison.md): plans STUDY if it has no plan
 # yet (STUDY_FLAGS go to `study plan`), runs its unfinished cases with GNU parallel, one case per
 # core, then summarizes. Interrupt it at will: finished cases are kept, the rest rerun.
 STUDY       ?= out/study
@@ -79,6 +79,15 @@ embree4-check:
 # installed) into target/embree4 and runs the test suite and the cross-check on it.
 embree4-test: setup
 	bash .ci/embree4-test
+
+# Man pages for vastocean and each of its commands into target/man (`man -l target/man/vastocean.1`).
+man: build
+	./target/release/vastocean man --out target/man
+
+# The README's two commands (`make run`, `make test`) in a Debian 13 root made with debootstrap,
+# with Debian's own Embree 4: what a user on current Debian gets. Needs root.
+debian13-test:
+	bash .ci/debian13-test
 
 clean:
 	$(CARGO) clean
