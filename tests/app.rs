@@ -491,7 +491,16 @@ fn study_plans_runs_through_gnu_parallel_resumes_and_summarizes() {
     assert_eq!(on_disk["finished"], 2);
     let csv = std::fs::read_to_string(study.join("cases.csv")).unwrap();
     assert_eq!(csv.lines().count(), 3, "{csv}");
-    assert!(csv.starts_with("case,wind_m_s,fetch_km,depth_m,rms_m,sky,"));
+    assert!(csv.starts_with("case,wind_m_s,fetch_km,depth_m,rms_m,rescale,steepness,sky,"));
+    // Every drawn sea is within the paper's rescale range and far from breaking.
+    for row in csv.lines().skip(1) {
+        let col: Vec<&str> = row.split(',').collect();
+        let (rescale, steepness): (f64, f64) = (col[5].parse().unwrap(), col[6].parse().unwrap());
+        assert!(
+            (0.59..=1.96).contains(&rescale) && steepness < 1.0 / 7.0,
+            "{row}"
+        );
+    }
     let per_sky = std::fs::read_to_string(study.join("per_sky.csv")).unwrap();
     assert!(per_sky.lines().count() >= 2, "{per_sky}");
     assert!(study.join("scatter.png").metadata().unwrap().len() > 1000);

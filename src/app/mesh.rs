@@ -68,8 +68,8 @@ pub fn run(job: &MeshJob) -> Result<MeshReport, AppError> {
         ply: job.ply.clone(),
     };
     if job.count_only {
-        let (triangles, vertices) = crate::lod::try_count(&params)?;
-        return Ok(report(triangles, vertices, params.max_distance(), None));
+        let c = crate::lod::try_count(&params)?;
+        return Ok(report(c.triangles, c.vertices, c.max_distance_m, None));
     }
     let ocean = Surface::new(&OceanParams::default(), job.seed)?;
     let (mesh, stats) = crate::lod::tessellate(&params, &ocean.sampler([0.0, 0.0]))?;

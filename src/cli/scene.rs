@@ -92,6 +92,15 @@ impl SceneFlags {
             .collect()
     }
 
+    /// [`SceneFlags::given`], and `--band` if it was given.
+    fn given_with_band(&self, band: bool) -> Vec<(&'static str, &'static str)> {
+        let mut g = self.given();
+        if band {
+            g.push(("camera.projection.band_deg", "--band"));
+        }
+        g
+    }
+
     /// The scene file (or the default scene) with the flags applied.
     fn scene(&self) -> Result<SceneConfig> {
         let mut s = match &self.config {
@@ -193,11 +202,7 @@ impl MergeArgs {
 impl RenderArgs {
     /// The scene keys the flags set, each with its flag (see [`SceneFlags::given`]).
     pub fn given(&self) -> Vec<(&'static str, &'static str)> {
-        let mut g = self.scene.given();
-        if self.band.is_some() {
-            g.push(("camera.projection.band_deg", "--band"));
-        }
-        g
+        self.scene.given_with_band(self.band.is_some())
     }
 
     /// The animation job of `--frames`.
@@ -270,11 +275,7 @@ pub struct CompareArgs {
 impl CompareArgs {
     /// The scene keys the flags set, each with its flag (see [`SceneFlags::given`]).
     pub fn given(&self) -> Vec<(&'static str, &'static str)> {
-        let mut g = self.scene.given();
-        if self.band.is_some() {
-            g.push(("camera.projection.band_deg", "--band"));
-        }
-        g
+        self.scene.given_with_band(self.band.is_some())
     }
 
     pub fn job(&self) -> Result<app::compare::CompareJob> {

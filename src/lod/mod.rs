@@ -365,14 +365,28 @@ pub fn displace(
 /// The exact number of triangles [`tessellate`] would build, without building anything.
 /// Panics if `params` is invalid (see [`LodParams::validate`]).
 pub fn count_triangles(params: &LodParams) -> usize {
-    try_count(params).expect("valid LodParams").0
+    try_count(params).expect("valid LodParams").triangles
 }
 
-/// Triangles and vertices [`tessellate`] would build.
-pub fn try_count(params: &LodParams) -> Result<(usize, usize), LodError> {
+/// What [`tessellate`] would build, counted without building it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeshCount {
+    pub triangles: usize,
+    pub vertices: usize,
+    /// As [`LodStats::max_distance_m`].
+    pub max_distance_m: f64,
+}
+
+/// Triangles, vertices and extent [`tessellate`] would build.
+pub fn try_count(params: &LodParams) -> Result<MeshCount, LodError> {
     params.validate()?;
     let geo = grid::Geometry::new(params)?;
-    Ok(geo.count())
+    let (triangles, vertices) = geo.count();
+    Ok(MeshCount {
+        triangles,
+        vertices,
+        max_distance_m: geo.max_distance(),
+    })
 }
 
 /// The rings for `params`: (size, inner half-width, outer half-width), metres.

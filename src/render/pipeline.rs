@@ -285,7 +285,7 @@ fn prepare_built(cfg: &SceneConfig, refittable: bool) -> Result<Prepared, Render
     let lod = crate::lod::params_for(&cfg.lod, &cfg.camera)?;
     check_memory(
         cfg,
-        crate::lod::try_count(&lod)?.0,
+        crate::lod::try_count(&lod)?.triangles,
         super::film::MAX_BATCHES,
         false,
     )?;

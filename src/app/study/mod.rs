@@ -18,26 +18,57 @@ use crate::config::{LodConfig, Projection, SceneConfig};
 use crate::image_io::write_atomically;
 use crate::rng::Rng;
 
-/// Where the cases' sea states are drawn from. The ranges cover the paper's Table 1 (wind
-/// 1.3-4.91 m/s, RMS height 0.098-0.548 m, fetch 99.95-204.5 km, depth 150.9-997.9 m) with a
-/// margin on each side. Wind is uniform; fetch, depth and RMS height, scale parameters spanning
-/// factors of 3 to 12, are log-uniform, so each octave is drawn as often. The RMS height is
-/// drawn independently of the wind, as the paper's cases pair them (its Table 1 follows no
-/// single wind-height law); it sets the amplitude, wind, fetch and depth the spectrum's shape.
+/// Where the cases' sea states are drawn from. Wind, fetch and depth cover the paper's Table 1
+/// (wind 1.3-4.91 m/s, fetch 99.95-204.5 km, depth 150.9-997.9 m) with a margin on each side;
+/// wind is uniform, fetch and depth, scale parameters spanning factors of 3 to 12, log-uniform.
+/// The RMS height is the spectrum's own times a factor drawn log-uniform from `rescale`, the
+/// range the paper's five Table 1 cases need ([`sea_shape`]), so that a case is a sea a wind
+/// makes, as near to it as the paper's are; a sea steeper than `max_steepness` (Hs over the
+/// peak wavelength; waves break at about 1/7) is drawn again.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Ranges {
     pub wind_m_s: (f64, f64),
     pub fetch_km: (f64, f64),
     pub depth_m: (f64, f64),
-    pub rms_m: (f64, f64),
+    /// How plans drawn before physical seas chose the RMS height: log-uniform over this range,
+    /// whatever the wind (rescale factors of 0.26 to 5.62 on the 93-case study).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rms_m: Option<(f64, f64)>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rescale: Option<(f64, f64)>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_steepness: Option<f64>,
 }
 
 pub const RANGES: Ranges = Ranges {
     wind_m_s: (1.0, 6.0),
     fetch_km: (80.0, 250.0),
     depth_m: (100.0, 1200.0),
-    rms_m: (0.08, 0.6),
+    rms_m: None,
+    rescale: Some((0.6, 1.95)),
+    max_steepness: Some(1.0 / 7.0),
 };
+
+/// How far a case's sea is from the sea its wind makes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SeaShape {
+    /// RMS height over the spectrum's own (the square root of its integral): 1 without an RMS
+    /// target.
+    pub rescale: f64,
+    /// Significant wave height (4 x RMS) over the spectrum's peak wavelength.
+    pub steepness: f64,
+}
+
+/// The rescale factor and steepness of a sea state (from its spectrum; no layers are built).
+pub fn sea_shape(ocean: &crate::config::OceanParams) -> SeaShape {
+    let spectrum = crate::ocean::Spectrum::new(ocean);
+    let own = spectrum.total_variance().sqrt();
+    let rms = ocean.rms_m.unwrap_or(own);
+    SeaShape {
+        rescale: rms / own,
+        steepness: 4.0 * rms * spectrum.peak_wavenumber() / std::f64::consts::TAU,
+    }
+}
 
 /// What a plan written before a setting existed ran with: a uniform render, one sea.
 fn one() -> u16 {
@@ -114,10 +145,25 @@ fn draw_case(job: &PlanJob, skies: &[String], k: usize) -> (SceneConfig, String)
         (f64::ln(lo) + (f64::ln(hi) - f64::ln(lo)) * r.f64()).exp()
     };
     let mut s = job.base.clone();
-    s.ocean.wind_speed = uniform(&mut r, RANGES.wind_m_s);
-    s.ocean.fetch_km = log_uniform(&mut r, RANGES.fetch_km);
-    s.ocean.depth_m = log_uniform(&mut r, RANGES.depth_m);
-    s.ocean.rms_m = Some(log_uniform(&mut r, RANGES.rms_m));
+    let (rescale, max_steepness) = (
+        RANGES.rescale.expect("physical seas"),
+        RANGES.max_steepness.expect("physical seas"),
+    );
+    // Seas past breaking are drawn again (none in these ranges so far: the guard is for ranges
+    // to come); the draws stay a function of the seed alone.
+    for _ in 0..1000 {
+        s.ocean.wind_speed = uniform(&mut r, RANGES.wind_m_s);
+        s.ocean.fetch_km = log_uniform(&mut r, RANGES.fetch_km);
+        s.ocean.depth_m = log_uniform(&mut r, RANGES.depth_m);
+        let factor = log_uniform(&mut r, rescale);
+        let own = crate::ocean::Spectrum::new(&s.ocean)
+            .total_variance()
+            .sqrt();
+        s.ocean.rms_m = Some(factor * own);
+        if sea_shape(&s.ocean).steepness <= max_steepness {
+            break;
+        }
+    }
     let sky = skies[((r.f64() * skies.len() as f64) as usize).min(skies.len() - 1)].clone();
     // Relative to the case's scene file, cases/K/scene.toml.
     s.sky.file = Some(Path::new("../../skies").join(&sky));
@@ -258,3 +304,58 @@ mod run;
 mod summary;
 pub use run::{CaseOutcome, run_case};
 pub use summary::{CaseRow, StudySummary, summarize};
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_paper_cases_lie_in_the_rescale_range_and_drawn_seas_stay_physical() {
+        let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+        let (lo, hi) = RANGES.rescale.unwrap();
+        let mut factors = Vec::new();
+        for case in [12, 22, 34, 50, 87] {
+            let s = SceneConfig::load(&scenes.join(format!("paper-case-{case}.toml"))).unwrap();
+            let shape = sea_shape(&s.ocean);
+            assert!((lo..=hi).contains(&shape.rescale), "case {case}: {shape:?}");
+            assert!(shape.steepness < 0.1, "case {case}: {shape:?}");
+            factors.push(shape.rescale);
+        }
+        // The range is the paper's, not wider than it needs by more than a margin.
+        let (min, max) = factors
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(a, b), &f| (a.min(f), b.max(f)));
+        assert!(min - lo < 0.05 && hi - max < 0.05, "{factors:?}");
+        let job = PlanJob {
+            out: PathBuf::new(),
+            cases: 200,
+            seed: 1,
+            base: SceneConfig::default(),
+            high: LodConfig::default(),
+            low: LodConfig::default(),
+            max_boost: 1,
+            realizations: 1,
+            skies_dir: PathBuf::new(),
+        };
+        let skies = vec!["a.exr".to_string()];
+        let mut drawn = Vec::new();
+        for k in 1..=200 {
+            let (s, _) = draw_case(&job, &skies, k);
+            let shape = sea_shape(&s.ocean);
+            assert!(
+                (lo * 0.999..=hi * 1.001).contains(&shape.rescale),
+                "case {k}: {shape:?}"
+            );
+            assert!(shape.steepness <= 1.0 / 7.0, "case {k}: {shape:?}");
+            assert!(
+                (RANGES.wind_m_s.0..=RANGES.wind_m_s.1).contains(&s.ocean.wind_speed),
+                "case {k}"
+            );
+            drawn.push(shape.rescale);
+        }
+        // Both ends of the range are drawn.
+        assert!(drawn.iter().any(|&f| f < lo * 1.1) && drawn.iter().any(|&f| f > hi * 0.9));
+        // The same seed draws the same case.
+        assert_eq!(draw_case(&job, &skies, 7).0, draw_case(&job, &skies, 7).0);
+    }
+}

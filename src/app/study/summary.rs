@@ -20,6 +20,10 @@ pub struct CaseRow {
     pub fetch_km: f64,
     pub depth_m: f64,
     pub rms_m: f64,
+    /// The RMS height over the spectrum's own, and Hs over the peak wavelength
+    /// ([`super::sea_shape`]).
+    pub rescale: f64,
+    pub steepness: f64,
     pub sky: String,
     pub sun_elevation_deg: f64,
     /// Ocean realizations pooled into the row (1: one sea). With more, the stds are roots of
@@ -222,12 +226,15 @@ pub fn summarize(dir: &Path) -> Result<StudySummary, AppError> {
                 Minor::of(&v),
             )
         };
+        let shape = super::sea_shape(&scene.ocean);
         rows.push(CaseRow {
             case: k,
             wind_m_s: scene.ocean.wind_speed,
             fetch_km: scene.ocean.fetch_km,
             depth_m: scene.ocean.depth_m,
             rms_m: scene.ocean.rms_m.unwrap_or(f64::NAN),
+            rescale: shape.rescale,
+            steepness: shape.steepness,
             sky,
             sun_elevation_deg: sun,
             realizations: seas.len(),
@@ -303,17 +310,19 @@ fn write_outputs(
     let cases = stage(cases_csv, |w| {
         writeln!(
             w,
-            "case,wind_m_s,fetch_km,depth_m,rms_m,sky,sun_elevation_deg,realizations,std_high_unmapped_corrected,std_low_mapped_corrected,std_low_mapped_lo,std_low_mapped_hi,std_low_unmapped_corrected,std_low_unmapped_lo,std_low_unmapped_hi,improvement_ratio,improvement_ratio_corrected,improvement_ratio_lo,improvement_ratio_hi,improvement_significant,improvement_ratio_without_glint,improvement_ratio_median_rows,improvement_ratio_trimmed,glint_rows,noise_model_check,cost_factor,seconds_total,commit"
+            "case,wind_m_s,fetch_km,depth_m,rms_m,rescale,steepness,sky,sun_elevation_deg,realizations,std_high_unmapped_corrected,std_low_mapped_corrected,std_low_mapped_lo,std_low_mapped_hi,std_low_unmapped_corrected,std_low_unmapped_lo,std_low_unmapped_hi,improvement_ratio,improvement_ratio_corrected,improvement_ratio_lo,improvement_ratio_hi,improvement_significant,improvement_ratio_without_glint,improvement_ratio_median_rows,improvement_ratio_trimmed,glint_rows,noise_model_check,cost_factor,seconds_total,commit"
         )?;
         for r in rows {
             writeln!(
                 w,
-                "{},{:.3},{:.2},{:.1},{:.4},{},{:.2},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.4},{:.4},{:.4},{:.4},{},{:.4},{:.4},{:.4},{},{:.3},{:.3},{:.1},{}",
+                "{},{:.3},{:.2},{:.1},{:.4},{:.3},{:.4},{},{:.2},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{:.4},{:.4},{:.4},{:.4},{},{:.4},{:.4},{:.4},{},{:.3},{:.3},{:.1},{}",
                 r.case,
                 r.wind_m_s,
                 r.fetch_km,
                 r.depth_m,
                 r.rms_m,
+                r.rescale,
+                r.steepness,
                 r.sky,
                 r.sun_elevation_deg,
                 r.realizations,
