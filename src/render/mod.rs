@@ -6,6 +6,7 @@ pub mod camera;
 pub mod film;
 pub mod integrator;
 pub mod pipeline;
+pub mod report;
 pub mod water;
 
 pub use crate::config::{NormalMode, Projection, Water};
