@@ -15,7 +15,7 @@ use serde::Serialize;
 use super::{AppError, check_outputs, with_extension};
 use crate::config::SceneConfig;
 use crate::image_io::{auto_exposure, commit_all, stage_exr_with, stage_json, stage_png};
-use crate::render::pipeline::{FrameUpdate, mean_luminance, prepare_for_frames};
+use crate::render::pipeline::{FrameUpdate, Setup, mean_luminance, prepare_with};
 
 /// Most frames one sequence may have (four digits in the file names).
 pub const MAX_FRAMES: usize = 9999;
@@ -199,7 +199,13 @@ pub fn run(job: &FramesJob) -> Result<SequenceReport, AppError> {
     let start = Instant::now();
     let mut cfg = job.scene.clone();
     cfg.ocean.time_s = times[0];
-    let mut prepared = prepare_for_frames(&cfg)?;
+    let mut prepared = prepare_with(
+        &cfg,
+        Setup {
+            refittable: true,
+            progress: job.progress,
+        },
+    )?;
     let mesh = prepared.accel.mesh();
     let mut report = SequenceReport {
         frames_planned: times.len(),

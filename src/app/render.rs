@@ -10,7 +10,7 @@ use super::{AppError, check_outputs, with_extension};
 use crate::config::SceneConfig;
 use crate::image_io::{auto_exposure, commit_all, stage_exr_with, stage_json, stage_png};
 use crate::render::film::Samples;
-use crate::render::pipeline::{PassInfo, RenderReport, prepare, render_scene};
+use crate::render::pipeline::{PassInfo, RenderReport, Setup, prepare_with, render_scene};
 
 /// A render job.
 #[derive(Clone, Debug)]
@@ -66,7 +66,13 @@ fn run_pass(job: &RenderJob, k: usize, n: usize) -> Result<RenderReport, AppErro
         passes: n,
         boost: None,
     };
-    let prepared = prepare(&job.scene)?;
+    let prepared = prepare_with(
+        &job.scene,
+        Setup {
+            refittable: false,
+            progress: job.progress,
+        },
+    )?;
     let (r, states) = prepared.render_samples(&job.scene, 0, samples, true, job.progress)?;
     let mut report = r.report;
     let spp = super::passes::pass_samples(k, n, job.scene.render.spp);

@@ -166,18 +166,54 @@ pub struct Prepared {
     camera_position_m: [f64; 2],
 }
 
+/// How [`prepare_with`] builds a scene.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Setup {
+    /// Embree builds a BVH it can refit ([`Prepared::advance_to`] moves the scene to another
+    /// time), as an animation needs.
+    pub refittable: bool,
+    /// A spinner on stderr for each phase (the ocean's FFTs, the tessellation, the BVH build).
+    pub progress: bool,
+}
+
 /// Builds the ocean, the tessellation and the BVH of a validated scene.
 pub fn prepare(cfg: &SceneConfig) -> Result<Prepared, RenderError> {
-    prepare_built(cfg, false)
+    prepare_with(cfg, Setup::default())
 }
 
-/// As [`prepare`], for an animation: Embree builds a BVH it can refit
-/// ([`Prepared::advance_to`] moves the scene to another time).
+/// As [`prepare`], for an animation (see [`Setup::refittable`]).
 pub fn prepare_for_frames(cfg: &SceneConfig) -> Result<Prepared, RenderError> {
-    prepare_built(cfg, true)
+    prepare_with(
+        cfg,
+        Setup {
+            refittable: true,
+            progress: false,
+        },
+    )
 }
 
-fn prepare_built(cfg: &SceneConfig, refittable: bool) -> Result<Prepared, RenderError> {
+/// A spinner on stderr naming a set-up phase that can take seconds (two 2048-texel layers,
+/// paper-high's 22 M-triangle BVH), cleared when the phase ends. Hidden without `progress`;
+/// indicatif draws nothing when stderr is not a terminal.
+fn phase(progress: bool, message: String) -> indicatif::ProgressBar {
+    if !progress {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new_spinner().with_message(message);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} {msg}  {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    bar.enable_steady_tick(std::time::Duration::from_millis(100));
+    bar
+}
+
+/// Builds the ocean, the tessellation and the BVH of a validated scene, as `setup` says.
+pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderError> {
+    let Setup {
+        refittable,
+        progress,
+    } = setup;
     // (the Rust BVH refits whatever it was built for; only Embree needs telling)
     #[cfg(not(feature = "embree"))]
     let _ = refittable;
@@ -195,7 +231,12 @@ fn prepare_built(cfg: &SceneConfig, refittable: bool) -> Result<Prepared, Render
     let (ocean, seconds_ocean, mesh, stats, seconds_tessellation) =
         pool.install(|| -> Result<_, RenderError> {
             let t = Instant::now();
+            let bar = phase(
+                progress,
+                format!("ocean: {} FFT layers", cfg.ocean.layers.len()),
+            );
             let ocean = Surface::new(&cfg.ocean, cfg.render.ocean_seed)?;
+            bar.finish_and_clear();
             let seconds_ocean = t.elapsed().as_secs_f64();
             let folded = ocean.summary().folded_fraction;
             if folded > MAX_FOLDED_FRACTION {
@@ -212,11 +253,21 @@ fn prepare_built(cfg: &SceneConfig, refittable: bool) -> Result<Prepared, Render
                 });
             }
             let t = Instant::now();
+            let bar = phase(progress, "tessellation".into());
             let (mesh, stats) = tessellate(&lod, &ocean.sampler(cfg.camera.position_m))?;
+            bar.finish_and_clear();
             Ok((ocean, seconds_ocean, mesh, stats, t.elapsed().as_secs_f64()))
         })?;
     let (skip_slope, skip_above_y) = pool.install(|| (max_slope(&mesh), highest_vertex_y(&mesh)));
     let mesh = Arc::new(mesh);
+    let bar = phase(
+        progress,
+        format!(
+            "BVH over {} triangles ({})",
+            mesh.triangle_count(),
+            cfg.render.backend
+        ),
+    );
     let (accel, seconds_build, embree_version): (Box<dyn Accel>, f64, Option<String>) =
         match cfg.render.backend {
             #[cfg(not(feature = "embree"))]
@@ -243,6 +294,7 @@ fn prepare_built(cfg: &SceneConfig, refittable: bool) -> Result<Prepared, Render
                 (Box::new(bvh), s, None)
             }
         };
+    bar.finish_and_clear();
     let sky_irradiance = sky.irradiance();
     Ok(Prepared {
         ocean,
@@ -500,7 +552,14 @@ impl Prepared {
 /// Renders a validated scene end to end; `progress` shows a bar on stderr. Output paths are
 /// filled in by [`write_outputs`].
 pub fn render_scene(cfg: &SceneConfig, progress: bool) -> Result<Rendered, RenderError> {
-    prepare(cfg)?.render(cfg, progress)
+    prepare_with(
+        cfg,
+        Setup {
+            refittable: false,
+            progress,
+        },
+    )?
+    .render(cfg, progress)
 }
 
 #[cfg(test)]
