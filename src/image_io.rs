@@ -267,7 +267,8 @@ pub fn write_atomically(
     stage(path, write)?.commit()
 }
 
-/// Writes a linear-RGB EXR (32-bit float channels R, G, B; ZIP compression).
+/// Writes a linear-RGB EXR (32-bit float channels R, G, B; PIZ compression, lossless: on
+/// rendered images smaller and faster to write than ZIP, docs/performance.md).
 pub fn write_exr(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
     use exr::prelude::*;
     let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
@@ -280,7 +281,7 @@ pub fn write_exr(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
         Encoding::SMALL_LOSSLESS,
         channels,
     );
-    layer.encoding.compression = Compression::ZIP16;
+    layer.encoding.compression = Compression::PIZ;
     let image = Image::from_layer(layer);
     Ok(write_atomically(path, |w| {
         image
@@ -290,7 +291,7 @@ pub fn write_exr(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
     })?)
 }
 
-/// Writes a linear-RGB EXR (32-bit float, ZIP) with further f32 channels, e.g. `Y.variance`.
+/// Writes a linear-RGB EXR (32-bit float, PIZ) with further f32 channels, e.g. `Y.variance`.
 pub fn write_exr_with(
     path: &Path,
     img: &RgbImage,
@@ -325,7 +326,7 @@ pub fn stage_exr_with(
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(list),
     );
-    layer.encoding.compression = Compression::ZIP16;
+    layer.encoding.compression = Compression::PIZ;
     let image = Image::from_layer(layer);
     Ok(stage(path, |w| {
         image
@@ -437,6 +438,10 @@ fn stage_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<St
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
         enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        // The PNG is a preview: fdeflate's fast mode encodes the default 2048 x 1024 image in a
+        // few tens of milliseconds where the default level took about a second on one core
+        // (docs/performance.md), for a somewhat larger file.
+        enc.set_compression(png::Compression::Fast);
         let mut writer = enc.write_header().map_err(std::io::Error::other)?;
         writer
             .write_image_data(rgb)
@@ -517,6 +522,33 @@ mod tests {
         }
         write_exr(&path, &img).unwrap();
         assert_eq!(read_exr(&path).unwrap(), img);
+        // PIZ on a render-like image: noisy floats of every magnitude, an extra channel, sizes
+        // that are not multiples of its blocks; every bit comes back.
+        let (w, h) = (67, 45);
+        let mut img = RgbImage::new(w, h);
+        let mut rng = crate::rng::Rng::keyed(&[7]);
+        let mut bits = || f32::from_bits(rng.next_u64() as u32 & 0x7f7f_ffff);
+        for p in img.pixels.iter_mut() {
+            *p = [bits(), bits() * 1e-30, bits()];
+        }
+        img.pixels[0] = [0.0, -0.0, f32::MIN_POSITIVE / 3.0];
+        let var: Vec<f32> = (0..w * h).map(|_| bits()).collect();
+        write_exr_with(&path, &img, &[("Y.variance", &var)]).unwrap();
+        let back = read_exr(&path).unwrap();
+        assert!(
+            back.pixels
+                .iter()
+                .flatten()
+                .zip(img.pixels.iter().flatten())
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        );
+        let var_back = read_exr_channel(&path, "Y.variance").unwrap();
+        assert!(
+            var_back
+                .iter()
+                .zip(&var)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        );
         let _ = fs::remove_dir_all(dir);
     }
 
