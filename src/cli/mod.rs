@@ -161,7 +161,8 @@ fn run_command(command: Command) -> Result<()> {
             let scene = a.job()?.scene;
             scene.validate().map_err(app::AppError::from)?;
             let text = scene.to_toml().map_err(|e| app::AppError::Run(e.into()))?;
-            print!("{text}");
+            // Written, not print!ed: a reader that stops early is not a panic (main exits 0).
+            std::io::Write::write_all(&mut std::io::stdout().lock(), text.as_bytes())?;
             Ok(())
         }
         Command::Render(a) => match a.frames {
