@@ -2,7 +2,9 @@
 //! the spectrum's band integral.
 
 use super::*;
-use crate::ocean::{OceanParams, SpectrumKind, SpreadingKind};
+use crate::ocean::{Interp, OceanParams, SpectrumKind, SpreadingKind};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
 #[test]
 fn split_lanes_is_split() {

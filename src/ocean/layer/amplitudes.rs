@@ -1,0 +1,114 @@
+//! The random amplitudes h0(k) of one layer: each wavevector cell's share of the spectrum,
+//! integrated over the cell, times a complex Gaussian.
+
+use std::f64::consts::TAU;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use super::{C32, signed_index};
+use crate::ocean::spectrum::Spectrum;
+
+/// Cells closer to k = 0 than this many fundamentals are integrated on at least an 8 x 8
+/// sub-grid: there P (~ k^-3 on the tail) and the overlap weights change within a cell (one
+/// midpoint under-counts a convex P by ~12 % at 2 fundamentals).
+const SUBCELL_RADIUS: f64 = 8.0;
+
+/// Integral of weight(|k|) P(-k) over the cell of side `dk` centred on (kx, kz) (h0(k) is drawn
+/// from P(-k); see the module doc), on a sub-grid fine enough that each sub-cell spans at most
+/// half the spreading's angular width (the paper's cases spread a few degrees, less than a cell
+/// near the peak of a coarse-gridded layer) and 8 x 8 near k = 0.
+fn cell_integral(
+    spectrum: &Spectrum,
+    weight: &(dyn Fn(f64) -> f64 + Sync),
+    kx: f64,
+    kz: f64,
+    dk: f64,
+) -> f64 {
+    let k = kx.hypot(kz);
+    let cell_angle = dk / k;
+    let width = spectrum.spreading_width(spectrum.omega(k));
+    let mut m = (2.0 * cell_angle / width).ceil().clamp(1.0, 16.0) as usize;
+    if k < SUBCELL_RADIUS * dk {
+        m = m.max(8);
+    }
+    if m == 1 {
+        return spectrum.p_k(-kx, -kz) * dk * dk * weight(k);
+    }
+    let sub = dk / m as f64;
+    let centre = 0.5 * (m - 1) as f64;
+    let mut sum = 0.0;
+    for a in 0..m {
+        for b in 0..m {
+            let x = kx + (a as f64 - centre) * sub;
+            let z = kz + (b as f64 - centre) * sub;
+            sum += spectrum.p_k(-x, -z) * weight(x.hypot(z));
+        }
+    }
+    sum * sub * sub
+}
+
+/// Two independent standard normals (Box-Muller).
+fn gauss_pair(rng: &mut ChaCha8Rng) -> (f64, f64) {
+    let u1 = (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+    let u2 = (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+    // 1 - u1 is in (0, 1], so the log is finite
+    let r = (-2.0 * (1.0 - u1).ln()).sqrt();
+    let (s, c) = (TAU * u2).sin_cos();
+    (r * c, r * s)
+}
+
+/// h0 for every cell of an `n` x `n` grid of spacing `dk` (kx-major), zero outside `band` and
+/// at DC and the Nyquist row and column, and the sum of the cell integrals (the expected height
+/// variance). Row `ix` draws from ChaCha8 stream `ix` of `seed`, so the result does not depend
+/// on the thread count.
+pub(super) fn draw(
+    spectrum: &Spectrum,
+    n: usize,
+    dk: f64,
+    band: (f64, f64),
+    weight: &(dyn Fn(f64) -> f64 + Sync),
+    seed: u64,
+) -> (Vec<C32>, f64) {
+    let half = n / 2;
+    let signed = move |i: usize| signed_index(i, n);
+    let rows: Vec<(Vec<C32>, f64)> = (0..n)
+        .into_par_iter()
+        .map(|ix| {
+            // one stream per row keeps the draw independent of scheduling
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            rng.set_stream(ix as u64);
+            let kx = signed(ix) * dk;
+            let mut h0 = vec![C32::default(); n];
+            let mut var = 0.0;
+            for (iz, slot) in h0.iter_mut().enumerate() {
+                let (g1, g2) = gauss_pair(&mut rng);
+                let kz = signed(iz) * dk;
+                let k = kx.hypot(kz);
+                // the Nyquist row and column pair with themselves; DC has no direction
+                if ix == half || iz == half || (ix == 0 && iz == 0) {
+                    continue;
+                }
+                if !(k >= band.0 && k < band.1) {
+                    continue;
+                }
+                let cell = cell_integral(spectrum, weight, kx, kz, dk);
+                if cell > 0.0 {
+                    // E|h0|^2 = P dk^2 / 2, so the sum of E|h~(k)|^2 over k is the variance
+                    let a = 0.5 * cell.sqrt();
+                    *slot = C32::new((a * g1) as f32, (a * g2) as f32);
+                    var += cell;
+                }
+            }
+            (h0, var)
+        })
+        .collect();
+    let mut h0 = Vec::with_capacity(n * n);
+    let mut expected_variance = 0.0;
+    for (h, v) in rows {
+        h0.extend_from_slice(&h);
+        expected_variance += v;
+    }
+    (h0, expected_variance)
+}

@@ -1,0 +1,217 @@
+//! Reads of a layer between its grid points: bilinear (the paper's), in lanes for the
+//! renderer's batches, Catmull-Rom bicubic, and the direct Fourier sum that is the oracle for
+//! both.
+
+use std::f64::consts::TAU;
+
+use rustfft::num_complex::Complex;
+
+use super::{FIELD_COUNT, Layer, Texel, field, signed_index};
+use crate::ocean::Interp;
+
+/// 25 000 km for the finest default layer) takes the scalar [`split`].
+pub(super) const LANE_RANGE: f64 = (1u32 << 30) as f64;
+
+/// [`split`] for lanes of grid coordinates within `LANE_RANGE`, in vector code. Adding
+/// 1.5 x 2^52 rounds a coordinate to the nearest integer, whose two's complement is then the
+/// low 32 bits of the sum (exact below 2^51); one less where that rounded up is the floor.
+/// (A float-to-int cast would be scalar code: Rust's `as` saturates.)
+#[inline]
+pub(super) fn split_lanes<const LANES: usize>(p: &[f64; LANES]) -> ([i32; LANES], [f32; LANES]) {
+    const ROUND: f64 = 6_755_399_441_055_744.0; // 1.5 x 2^52
+    let mut i = [0i32; LANES];
+    let mut f = [0.0f32; LANES];
+    for l in 0..LANES {
+        let shifted = p[l] + ROUND;
+        let nearest = shifted - ROUND;
+        let up = nearest > p[l];
+        let floor = if up { nearest - 1.0 } else { nearest };
+        i[l] = (shifted.to_bits() as i32).wrapping_sub(i32::from(up));
+        f[l] = (p[l] - floor) as f32;
+    }
+    (i, f)
+}
+
+/// The weights of texels (ix, iz), (ix+1, iz), (ix, iz+1), (ix+1, iz+1) at fractions (fx, fz).
+#[inline]
+fn bilinear_weights(fx: f32, fz: f32) -> [f32; 4] {
+    let (gx, gz) = (1.0 - fx, 1.0 - fz);
+    [gx * gz, fx * gz, gx * fz, fx * fz]
+}
+
+/// `sum += t`, field by field.
+#[inline]
+pub(crate) fn add_texel(sum: &mut Texel, t: &Texel) {
+    for (s, t) in sum.iter_mut().zip(t) {
+        *s += t;
+    }
+}
+
+/// The weighted sum of four texels, field by field.
+#[inline]
+fn blend(t: [&Texel; 4], w: [f32; 4]) -> Texel {
+    let mut r = [0.0f32; FIELD_COUNT];
+    for j in 0..FIELD_COUNT {
+        r[j] = w[0] * t[0][j] + w[1] * t[1][j] + w[2] * t[2][j] + w[3] * t[3][j];
+    }
+    r
+}
+
+#[inline]
+pub(super) fn split(p: f64) -> (i64, f32) {
+    // truncation plus correction: floor() is a libm call on baseline x86-64
+    let i = p as i64;
+    let i = if (i as f64) > p { i - 1 } else { i };
+    (i, (p - i as f64) as f32)
+}
+
+#[inline]
+fn catmull_rom(t: f32) -> [f32; 4] {
+    let t2 = t * t;
+    let t3 = t2 * t;
+    [
+        0.5 * (-t3 + 2.0 * t2 - t),
+        0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
+        0.5 * (-3.0 * t3 + 4.0 * t2 + t),
+        0.5 * (t3 - t2),
+    ]
+}
+
+impl Layer {
+    #[inline]
+    fn texel(&self, ix: i64, iz: i64) -> &Texel {
+        let m = (self.n - 1) as i64;
+        &self.fields[(iz & m) as usize * self.n + (ix & m) as usize]
+    }
+
+    /// Bilinear read at grid coordinates (px, pz) = position / dx, any value (wraps).
+    #[inline]
+    pub fn bilinear(&self, px: f64, pz: f64) -> Texel {
+        let (ix, fx) = split(px);
+        let (iz, fz) = split(pz);
+        let (t00, t10) = (self.texel(ix, iz), self.texel(ix + 1, iz));
+        let (t01, t11) = (self.texel(ix, iz + 1), self.texel(ix + 1, iz + 1));
+        blend([t00, t10, t01, t11], bilinear_weights(fx, fz))
+    }
+
+    /// Adds the bilinear reads at the grid coordinates `(px[l], pz[l])` of the first `count`
+    /// lanes into `sum[l]`, bit for bit `sum[l] += self.bilinear(px[l], pz[l])`. The lanes'
+    /// cells and weights are computed together (vector code, where `bilinear` spends most of
+    /// its instructions one point at a time); each lane then reads its four texels. Lanes past
+    /// `count` are computed and not read, whatever they hold.
+    #[inline]
+    pub fn add_bilinear_lanes<const LANES: usize>(
+        &self,
+        px: &[f64; LANES],
+        pz: &[f64; LANES],
+        count: usize,
+        sum: &mut [Texel; LANES],
+    ) {
+        debug_assert!(count <= LANES);
+        // All lanes, without a branch (one past `count` out of range costs time, not bits).
+        let in_range = px.iter().zip(pz).fold(true, |ok, (x, z)| {
+            ok & (x.abs() < LANE_RANGE) & (z.abs() < LANE_RANGE)
+        });
+        if !in_range {
+            // Far out (or NaN): the scalar read, whose split takes any coordinate.
+            for l in 0..count {
+                add_texel(&mut sum[l], &self.bilinear(px[l], pz[l]));
+            }
+            return;
+        }
+        let (ix, fx) = split_lanes(px);
+        let (iz, fz) = split_lanes(pz);
+        let m = (self.n - 1) as i32;
+        let shift = self.n.trailing_zeros();
+        // Per corner, per lane (the layout vector code wants).
+        let mut cells = [[0u32; LANES]; 4];
+        let mut weights = [[0.0f32; LANES]; 4];
+        for l in 0..LANES {
+            let (x0, x1) = (ix[l] & m, (ix[l] + 1) & m);
+            let (z0, z1) = ((iz[l] & m) << shift, ((iz[l] + 1) & m) << shift);
+            for (c, i) in [z0 | x0, z0 | x1, z1 | x0, z1 | x1].into_iter().enumerate() {
+                cells[c][l] = i as u32;
+            }
+            for (c, w) in bilinear_weights(fx[l], fz[l]).into_iter().enumerate() {
+                weights[c][l] = w;
+            }
+        }
+        // Masking a cell (below n^2, a power of two) changes nothing but spares the bounds
+        // check: the compiler knows i & (len - 1) < len.
+        let f = &self.fields[..];
+        let mask = f.len() - 1;
+        for (l, s) in sum.iter_mut().enumerate().take(count) {
+            let t = blend(
+                std::array::from_fn(|c| &f[cells[c][l] as usize & mask]),
+                std::array::from_fn(|c| weights[c][l]),
+            );
+            add_texel(s, &t);
+        }
+    }
+
+    /// Catmull-Rom bicubic read at grid coordinates (px, pz) (wraps).
+    #[inline]
+    pub fn bicubic(&self, px: f64, pz: f64) -> Texel {
+        let (ix, fx) = split(px);
+        let (iz, fz) = split(pz);
+        let (wx, wz) = (catmull_rom(fx), catmull_rom(fz));
+        let mut r = [0.0f32; FIELD_COUNT];
+        for (dz, wzv) in wz.iter().enumerate() {
+            let mut row = [0.0f32; FIELD_COUNT];
+            for (dx, wxv) in wx.iter().enumerate() {
+                let t = self.texel(ix - 1 + dx as i64, iz - 1 + dz as i64);
+                for j in 0..FIELD_COUNT {
+                    row[j] += wxv * t[j];
+                }
+            }
+            for j in 0..FIELD_COUNT {
+                r[j] += wzv * row[j];
+            }
+        }
+        r
+    }
+
+    /// Read at grid coordinates with the chosen interpolation.
+    #[inline]
+    pub fn read(&self, px: f64, pz: f64, interp: Interp) -> Texel {
+        match interp {
+            Interp::Bilinear => self.bilinear(px, pz),
+            Interp::Bicubic => self.bicubic(px, pz),
+        }
+    }
+
+    /// The eight fields at (x, z) metres by summing the Fourier series directly (O(n^2), f64):
+    /// the exact band-limited field the grid samples.
+    pub fn eval_direct(&self, x: f64, z: f64) -> [f64; FIELD_COUNT] {
+        let n = self.n;
+        let dk = TAU / self.size_m;
+        let signed = |i: usize| signed_index(i, n);
+        let lam = self.choppiness;
+        let mut v = [0.0f64; FIELD_COUNT];
+        for ix in 0..n {
+            let kx = signed(ix) * dk;
+            for iz in 0..n {
+                let h = self.h_tilde(ix, iz, self.time_s);
+                if h == Complex::default() {
+                    continue;
+                }
+                let kz = signed(iz) * dk;
+                let k = kx.hypot(kz);
+                let (ux, uz) = (kx / k, kz / k);
+                // the phase is reduced per axis so that x + L gives the same bits
+                let ph = (signed(ix) * (x / self.size_m)).rem_euclid(1.0)
+                    + (signed(iz) * (z / self.size_m)).rem_euclid(1.0);
+                let q = h * Complex::from_polar(1.0, TAU * ph);
+                v[field::H] += q.re;
+                v[field::DX] -= lam * ux * q.im;
+                v[field::DZ] -= lam * uz * q.im;
+                v[field::DH_DX] -= kx * q.im;
+                v[field::DH_DZ] -= kz * q.im;
+                v[field::DDX_DX] -= lam * kx * ux * q.re;
+                v[field::DDZ_DZ] -= lam * kz * uz * q.re;
+                v[field::DDX_DZ] -= lam * kx * uz * q.re;
+            }
+        }
+        v
+    }
+}
