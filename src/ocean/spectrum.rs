@@ -144,7 +144,16 @@ pub const MAX_PEAK_SPREADING: f64 = 75.0;
 
 /// Mitsuyasu's exponent s(omega) (Mitsuyasu et al. 1975, as in Horvath 2015 eq. 33-34).
 pub fn mitsuyasu_s(omega: f64, omega_p: f64, u: f64) -> f64 {
-    let s_p = 11.5 * (G / (omega_p * u)).powf(2.5);
+    mitsuyasu_s_from_peak(omega, omega_p, mitsuyasu_peak(omega_p, u))
+}
+
+/// Mitsuyasu's exponent at the peak, s_p = 11.5 (g / (omega_p U))^2.5.
+fn mitsuyasu_peak(omega_p: f64, u: f64) -> f64 {
+    11.5 * (G / (omega_p * u)).powf(2.5)
+}
+
+/// [`mitsuyasu_s`] from the exponent at the peak `s_p` (what a spectrum computes once).
+fn mitsuyasu_s_from_peak(omega: f64, omega_p: f64, s_p: f64) -> f64 {
     let r = omega / omega_p;
     if r <= 1.0 {
         s_p * r.powi(5)
@@ -197,6 +206,9 @@ pub struct Spectrum {
     omega_cut: f64,
     /// Largest Mitsuyasu exponent (`OceanParams::spreading_cap`); infinity = uncapped.
     pub spreading_cap: f64,
+    /// Mitsuyasu's exponent at the peak as published, computed once (every cell of every
+    /// layer needs it twice).
+    mitsuyasu_peak: f64,
 }
 
 impl Spectrum {
@@ -227,6 +239,7 @@ impl Spectrum {
             omega_p,
             omega_cut,
             spreading_cap: params.spreading_cap.unwrap_or(f64::INFINITY),
+            mitsuyasu_peak: mitsuyasu_peak(omega_p, u),
         }
     }
 
@@ -295,7 +308,8 @@ impl Spectrum {
     pub fn spreading_width(&self, omega: f64) -> f64 {
         match self.spreading {
             SpreadingKind::Mitsuyasu => {
-                let s = mitsuyasu_s(omega, self.omega_p, self.wind_speed).min(self.spreading_cap);
+                let s = mitsuyasu_s_from_peak(omega, self.omega_p, self.mitsuyasu_peak)
+                    .min(self.spreading_cap);
                 (2.0 / s.max(1e-9)).sqrt().min(PI)
             }
             SpreadingKind::DonelanBanner => {
@@ -311,7 +325,7 @@ impl Spectrum {
     pub fn spreading_at(&self, omega: f64, theta: f64) -> f64 {
         match self.spreading {
             SpreadingKind::Mitsuyasu => {
-                let s = mitsuyasu_s(omega, self.omega_p, self.wind_speed);
+                let s = mitsuyasu_s_from_peak(omega, self.omega_p, self.mitsuyasu_peak);
                 cos_2s(theta, s.min(self.spreading_cap))
             }
             SpreadingKind::DonelanBanner => {
@@ -336,7 +350,11 @@ impl Spectrum {
         if k == 0.0 {
             return 0.0;
         }
-        let omega = self.omega(k);
+        self.p_k_at(kx, kz, k, self.omega(k))
+    }
+
+    /// [`Spectrum::p_k`] where |k| = `k` > 0 and `omega` = omega(k) are already known.
+    pub(crate) fn p_k_at(&self, kx: f64, kz: f64, k: f64, omega: f64) -> f64 {
         let s = self.s_omega(omega);
         if s == 0.0 {
             return 0.0;

@@ -27,14 +27,16 @@ fn cell_integral(
     dk: f64,
 ) -> f64 {
     let k = kx.hypot(kz);
+    let omega = spectrum.omega(k);
     let cell_angle = dk / k;
-    let width = spectrum.spreading_width(spectrum.omega(k));
+    let width = spectrum.spreading_width(omega);
     let mut m = (2.0 * cell_angle / width).ceil().clamp(1.0, 16.0) as usize;
     if k < SUBCELL_RADIUS * dk {
         m = m.max(8);
     }
     if m == 1 {
-        return spectrum.p_k(-kx, -kz) * dk * dk * weight(k);
+        // |-k| = k, so what p_k(-kx, -kz) would compute first is known
+        return spectrum.p_k_at(-kx, -kz, k, omega) * dk * dk * weight(k);
     }
     let sub = dk / m as f64;
     let centre = 0.5 * (m - 1) as f64;
@@ -59,10 +61,15 @@ fn gauss_pair(rng: &mut ChaCha8Rng) -> (f64, f64) {
     (r * c, r * s)
 }
 
+/// Words of the ChaCha8 stream one cell's [`gauss_pair`] reads (two `u64`).
+const WORDS_PER_CELL: u128 = 4;
+
 /// h0 for every cell of an `n` x `n` grid of spacing `dk` (kx-major), zero outside `band` and
 /// at DC and the Nyquist row and column, and the sum of the cell integrals (the expected height
-/// variance). Row `ix` draws from ChaCha8 stream `ix` of `seed`, so the result does not depend
-/// on the thread count.
+/// variance). Cell (ix, iz) draws its pair of normals from words `4 iz` to `4 iz + 3` of ChaCha8
+/// stream `ix` of `seed`, so the result depends neither on the thread count nor on which cells
+/// are drawn: only cells with energy seek to their words and draw (a coarse layer's band fills
+/// a fifth of its grid).
 pub(super) fn draw(
     spectrum: &Spectrum,
     n: usize,
@@ -73,42 +80,45 @@ pub(super) fn draw(
 ) -> (Vec<C32>, f64) {
     let half = n / 2;
     let signed = move |i: usize| signed_index(i, n);
-    let rows: Vec<(Vec<C32>, f64)> = (0..n)
-        .into_par_iter()
-        .map(|ix| {
-            // one stream per row keeps the draw independent of scheduling
+    let mut h0 = vec![C32::default(); n * n];
+    let row_variance: Vec<f64> = h0
+        .par_chunks_mut(n)
+        .enumerate()
+        .map(|(ix, row)| {
+            let kx = signed(ix) * dk;
+            // the Nyquist row pairs with itself; a row outside the band holds nothing
+            if ix == half || kx.abs() >= band.1 {
+                return 0.0;
+            }
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
             rng.set_stream(ix as u64);
-            let kx = signed(ix) * dk;
-            let mut h0 = vec![C32::default(); n];
             let mut var = 0.0;
-            for (iz, slot) in h0.iter_mut().enumerate() {
-                let (g1, g2) = gauss_pair(&mut rng);
-                let kz = signed(iz) * dk;
-                let k = kx.hypot(kz);
-                // the Nyquist row and column pair with themselves; DC has no direction
-                if ix == half || iz == half || (ix == 0 && iz == 0) {
+            for (iz, slot) in row.iter_mut().enumerate() {
+                // the Nyquist column pairs with itself; DC has no direction
+                if iz == half || (ix == 0 && iz == 0) {
                     continue;
                 }
+                let kz = signed(iz) * dk;
+                let k = kx.hypot(kz);
                 if !(k >= band.0 && k < band.1) {
                     continue;
                 }
                 let cell = cell_integral(spectrum, weight, kx, kz, dk);
                 if cell > 0.0 {
+                    let at = WORDS_PER_CELL * iz as u128;
+                    // a seek refills ChaCha's block buffer: only where the previous cell was skipped
+                    if rng.get_word_pos() != at {
+                        rng.set_word_pos(at);
+                    }
+                    let (g1, g2) = gauss_pair(&mut rng);
                     // E|h0|^2 = P dk^2 / 2, so the sum of E|h~(k)|^2 over k is the variance
                     let a = 0.5 * cell.sqrt();
                     *slot = C32::new((a * g1) as f32, (a * g2) as f32);
                     var += cell;
                 }
             }
-            (h0, var)
+            var
         })
         .collect();
-    let mut h0 = Vec::with_capacity(n * n);
-    let mut expected_variance = 0.0;
-    for (h, v) in rows {
-        h0.extend_from_slice(&h);
-        expected_variance += v;
-    }
-    (h0, expected_variance)
+    (h0, row_variance.iter().sum())
 }

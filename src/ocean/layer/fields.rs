@@ -30,68 +30,89 @@ impl Layer {
     }
 
     /// Recomputes the eight fields at time `t` (eq. 2, then four packed 2-D inverse FFTs).
+    ///
+    /// Four planes A_j = F_{2j} + i F_{2j+1} = h~ m_j(k) hold the field pairs (h, Dx),
+    /// (Dz, dh/dx), (dh/dz, dDx/dx), (dDz/dz, dDx/dz), with D~ = i lambda k/|k| h~ and
+    /// d/dx -> i kx. Each kx row is filled and transformed along kz while it is in cache (h~ and
+    /// the multipliers once per cell for all four planes; a row outside the band stays zero and
+    /// skips its transforms), each plane is transposed, and each z row is transformed along kx
+    /// and written into its texels once, all eight fields together.
     pub fn compute_fields(&mut self, t: f64) {
         let n = self.n;
         self.time_s = t;
         let dk = TAU / self.size_m;
         let signed = move |i: usize| signed_index(i, n);
         let lam = self.choppiness;
-        let mut ht = vec![C32::default(); n * n];
-        ht.par_chunks_mut(n).enumerate().for_each(|(ix, row)| {
-            for (iz, out) in row.iter_mut().enumerate() {
-                let h = self.h_tilde(ix, iz, t);
-                *out = C32::new(h.re as f32, h.im as f32);
-            }
-        });
-        // A_j = F_{2j} + i F_{2j+1} = h~ m_j(k) for the field pairs (h, Dx), (Dz, dh/dx),
-        // (dh/dz, dDx/dx), (dDz/dz, dDx/dz), with D~ = i lambda k/|k| h~ and d/dx -> i kx.
-        let multiplier = |j: usize, kx: f64, kz: f64| -> C32 {
-            let k = kx.hypot(kz);
-            let (ux, uz) = if k > 0.0 {
-                (kx / k, kz / k)
-            } else {
-                (0.0, 0.0)
-            };
-            let m = match j {
-                0 => Complex::new(1.0 - lam * ux, 0.0),
-                1 => Complex::new(-kx, lam * uz),
-                2 => Complex::new(0.0, kz - lam * kx * ux),
-                _ => Complex::new(-lam * kz * uz, -lam * kx * uz),
-            };
-            C32::new(m.re as f32, m.im as f32)
-        };
-        let mut a = vec![C32::default(); n * n];
-        let mut b = vec![C32::default(); n * n];
-        for j in 0..4 {
-            a.par_chunks_mut(n)
-                .zip(ht.par_chunks(n))
+        let scratch_len = self.fft.get_inplace_scratch_len();
+        let mut planes: [Vec<C32>; 4] = std::array::from_fn(|_| vec![C32::default(); n * n]);
+        {
+            let this = &*self;
+            let [p0, p1, p2, p3] = &mut planes;
+            p0.par_chunks_mut(n)
+                .zip(p1.par_chunks_mut(n))
+                .zip(p2.par_chunks_mut(n))
+                .zip(p3.par_chunks_mut(n))
                 .enumerate()
-                .for_each(|(ix, (row, hrow))| {
-                    let kx = signed(ix) * dk;
-                    for (iz, (out, h)) in row.iter_mut().zip(hrow).enumerate() {
-                        *out = if *h == C32::default() {
-                            C32::default()
-                        } else {
-                            *h * multiplier(j, kx, signed(iz) * dk)
-                        };
-                    }
-                });
-            // a: [kx][kz] -> [kx][z]; b = transpose: [z][kx] -> [z][x]
-            self.fft_rows(&mut a);
-            transpose(&a, &mut b, n);
-            self.fft_rows(&mut b);
-            self.fields
-                .par_chunks_mut(n)
-                .zip(b.par_chunks(n))
-                .for_each(|(out, src)| {
-                    for (t, v) in out.iter_mut().zip(src) {
-                        t[2 * j] = v.re;
-                        t[2 * j + 1] = v.im;
-                    }
-                });
+                .for_each_init(
+                    || vec![C32::default(); scratch_len],
+                    |scratch, (ix, (((r0, r1), r2), r3))| {
+                        let kx = signed(ix) * dk;
+                        let rows = [r0, r1, r2, r3];
+                        let mut any = false;
+                        #[allow(clippy::needless_range_loop)] // iz indexes four rows at once
+                        for iz in 0..n {
+                            let h = this.h_tilde(ix, iz, t);
+                            if h == Complex::default() {
+                                continue;
+                            }
+                            any = true;
+                            let h = C32::new(h.re as f32, h.im as f32);
+                            let m = multipliers(lam, kx, signed(iz) * dk);
+                            for j in 0..4 {
+                                rows[j][iz] = h * m[j];
+                            }
+                        }
+                        if any {
+                            for row in rows {
+                                this.fft.process_with_scratch(row, scratch);
+                            }
+                        }
+                    },
+                );
         }
+        // [kx][z] -> [z][kx], one plane at a time through one spare plane
+        let mut spare = vec![C32::default(); n * n];
+        for plane in &mut planes {
+            transpose(plane, &mut spare, n);
+            std::mem::swap(plane, &mut spare);
+        }
+        drop(spare);
+        let fft = &self.fft;
+        let [p0, p1, p2, p3] = &mut planes;
+        self.fields
+            .par_chunks_mut(n)
+            .zip(p0.par_chunks_mut(n))
+            .zip(p1.par_chunks_mut(n))
+            .zip(p2.par_chunks_mut(n))
+            .zip(p3.par_chunks_mut(n))
+            .for_each_init(
+                || vec![C32::default(); scratch_len],
+                |scratch, ((((out, r0), r1), r2), r3)| {
+                    let mut rows = [r0, r1, r2, r3];
+                    for row in rows.iter_mut() {
+                        fft.process_with_scratch(row, scratch);
+                    }
+                    for (x, texel) in out.iter_mut().enumerate() {
+                        for j in 0..4 {
+                            texel[2 * j] = rows[j][x].re;
+                            texel[2 * j + 1] = rows[j][x].im;
+                        }
+                    }
+                },
+            );
     }
 
+    #[cfg(test)]
     fn fft_rows(&self, buf: &mut [C32]) {
         let n = self.n;
         let rows_per_task = (4096 / n).max(1);
@@ -119,6 +140,24 @@ impl Layer {
         self.fft_rows(&mut b);
         b
     }
+}
+
+/// The spectral multipliers m_j(k) of [`Layer::compute_fields`]'s four planes.
+#[inline]
+fn multipliers(lam: f64, kx: f64, kz: f64) -> [C32; 4] {
+    let k = kx.hypot(kz);
+    let (ux, uz) = if k > 0.0 {
+        (kx / k, kz / k)
+    } else {
+        (0.0, 0.0)
+    };
+    [
+        Complex::new(1.0 - lam * ux, 0.0),
+        Complex::new(-kx, lam * uz),
+        Complex::new(0.0, kz - lam * kx * ux),
+        Complex::new(-lam * kz * uz, -lam * kx * uz),
+    ]
+    .map(|m| C32::new(m.re as f32, m.im as f32))
 }
 
 /// Out-of-place transpose of an n x n matrix in row blocks, so reads stay in short runs.

@@ -34,8 +34,8 @@ use rayon::prelude::*;
 use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 
-use super::spectrum::Spectrum;
 use super::OceanError;
+use super::spectrum::Spectrum;
 use crate::config::ocean::{MAX_N, MIN_N};
 use crate::rng::splitmix64;
 

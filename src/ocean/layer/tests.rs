@@ -342,3 +342,32 @@ fn seed_determines_the_realization() {
     assert_eq!(a.fields(), b.fields());
     assert_ne!(a.fields(), c.fields());
 }
+
+/// A cell's amplitude is its own: the cells two bands share get the same h0 whichever band is
+/// drawn (each cell seeks to its own words of its row's stream, so skipping the cells outside a
+/// band shifts nothing).
+#[test]
+fn a_cells_amplitude_does_not_depend_on_the_band() {
+    let p = OceanParams::default();
+    let (size, n) = (47.3, 64);
+    let dk = TAU / size;
+    let layer = |band| Layer::new(&spectrum(&p), size, n, band, 1.3, 5, 0.0).unwrap();
+    let narrow = layer((6.0 * dk, 12.0 * dk));
+    let wide = layer((2.0 * dk, 30.0 * dk));
+    let mut shared = 0;
+    for (i, (a, b)) in narrow.h0.iter().zip(&wide.h0).enumerate() {
+        let (ix, iz) = (i / n, i % n);
+        let k = signed_index(ix, n).hypot(signed_index(iz, n)) * dk;
+        if (6.0 * dk..12.0 * dk).contains(&k) {
+            assert_eq!(a, b, "cell ({ix}, {iz})");
+            shared += usize::from(a.norm_sqr() > 0.0);
+        } else {
+            assert_eq!(
+                *a,
+                C32::default(),
+                "cell ({ix}, {iz}) is outside the narrow band"
+            );
+        }
+    }
+    assert!(shared > 300, "{shared} shared cells with energy");
+}
