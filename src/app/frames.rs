@@ -204,6 +204,7 @@ pub fn run(job: &FramesJob) -> Result<SequenceReport, AppError> {
         Setup {
             refittable: true,
             progress: job.progress,
+            ..Setup::default()
         },
     )?;
     let mesh = prepared.accel.mesh();

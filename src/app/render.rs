@@ -71,6 +71,7 @@ fn run_pass(job: &RenderJob, k: usize, n: usize) -> Result<RenderReport, AppErro
         Setup {
             refittable: false,
             progress: job.progress,
+            ..Setup::default()
         },
     )?;
     let (r, states) = prepared.render_samples(&job.scene, 0, samples, true, job.progress)?;

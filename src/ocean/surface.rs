@@ -392,6 +392,10 @@ impl Surface {
     pub fn params(&self) -> &OceanParams {
         &self.params
     }
+    /// The seed the layers' amplitudes were drawn from.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
     pub fn spectrum(&self) -> Option<&Spectrum> {
         self.spectrum.as_ref()
     }

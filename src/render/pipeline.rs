@@ -74,6 +74,9 @@ pub enum RenderError {
         backend: &'static str,
         message: String,
     },
+    /// A shared ocean ([`Setup::ocean`]) used where it cannot be: a programming error.
+    #[error("a shared ocean {0}")]
+    SharedOcean(&'static str),
 }
 
 /// Largest share of the sea surface that may fold over itself (Jacobian <= 0); more is refused.
@@ -146,7 +149,8 @@ pub fn make_sky(cfg: &SceneConfig) -> Result<Sky, RenderError> {
 /// tessellation, the BVH and the sky, built once and traced as often as wanted (the scenario
 /// comparison traces one mesh with both normal modes and two seeds).
 pub struct Prepared {
-    pub ocean: Surface,
+    /// Shared with another prepared scene when [`Setup::ocean`] handed it in.
+    pub ocean: Arc<Surface>,
     pub lod: LodParams,
     /// The BVH the scene asked for (`render.backend`).
     pub accel: Box<dyn Accel>,
@@ -167,13 +171,17 @@ pub struct Prepared {
 }
 
 /// How [`prepare_with`] builds a scene.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Default)]
 pub struct Setup {
     /// Embree builds a BVH it can refit ([`Prepared::advance_to`] moves the scene to another
     /// time), as an animation needs.
     pub refittable: bool,
     /// A spinner on stderr for each phase (the ocean's FFTs, the tessellation, the BVH build).
     pub progress: bool,
+    /// An ocean already built for this scene's `[ocean]` and `render.ocean_seed`, used instead
+    /// of building it again (the comparison's two tessellations share one); one built for
+    /// another sea or seed is refused. Such a scene cannot [`Prepared::advance_to`].
+    pub ocean: Option<Arc<Surface>>,
 }
 
 /// Builds the ocean, the tessellation and the BVH of a validated scene.
@@ -187,7 +195,7 @@ pub fn prepare_for_frames(cfg: &SceneConfig) -> Result<Prepared, RenderError> {
         cfg,
         Setup {
             refittable: true,
-            progress: false,
+            ..Setup::default()
         },
     )
 }
@@ -213,7 +221,15 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
     let Setup {
         refittable,
         progress,
+        ocean: shared_ocean,
     } = setup;
+    if let Some(o) = &shared_ocean
+        && (o.params() != &cfg.ocean || o.seed() != cfg.render.ocean_seed)
+    {
+        return Err(RenderError::SharedOcean(
+            "was built for another sea state or seed than this scene's",
+        ));
+    }
     // (the Rust BVH refits whatever it was built for; only Embree needs telling)
     #[cfg(not(feature = "embree"))]
     let _ = refittable;
@@ -231,13 +247,18 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
     let (ocean, seconds_ocean, mesh, stats, seconds_tessellation) =
         pool.install(|| -> Result<_, RenderError> {
             let t = Instant::now();
-            let bar = phase(
-                progress,
-                format!("ocean: {} FFT layers", cfg.ocean.layers.len()),
-            );
-            let ocean = Surface::new(&cfg.ocean, cfg.render.ocean_seed)?;
-            bar.finish_and_clear();
-            let seconds_ocean = t.elapsed().as_secs_f64();
+            let (ocean, seconds_ocean) = match shared_ocean {
+                Some(ocean) => (ocean, 0.0),
+                None => {
+                    let bar = phase(
+                        progress,
+                        format!("ocean: {} FFT layers", cfg.ocean.layers.len()),
+                    );
+                    let ocean = Surface::new(&cfg.ocean, cfg.render.ocean_seed)?;
+                    bar.finish_and_clear();
+                    (Arc::new(ocean), t.elapsed().as_secs_f64())
+                }
+            };
             let folded = ocean.summary().folded_fraction;
             if folded > MAX_FOLDED_FRACTION {
                 return Err(RenderError::Folded {
@@ -338,7 +359,9 @@ impl Prepared {
         camera_height_m: f64,
     ) -> Result<FrameUpdate, RenderError> {
         let t = Instant::now();
-        let ocean = &mut self.ocean;
+        let ocean = Arc::get_mut(&mut self.ocean).ok_or(RenderError::SharedOcean(
+            "cannot move to another time: prepare the animation with an ocean of its own",
+        ))?;
         self.pool.install(|| ocean.set_time(time_s))?;
         let seconds_ocean = t.elapsed().as_secs_f64();
         let folded = self.ocean.summary().folded_fraction;
@@ -555,8 +578,8 @@ pub fn render_scene(cfg: &SceneConfig, progress: bool) -> Result<Rendered, Rende
     prepare_with(
         cfg,
         Setup {
-            refittable: false,
             progress,
+            ..Setup::default()
         },
     )?
     .render(cfg, progress)
@@ -591,5 +614,42 @@ mod tests {
         } else {
             assert!(matches!(e, Err(RenderError::NoEmbree)));
         }
+    }
+
+    /// A scene handed an ocean prepares on it without building another (its report says 0 s
+    /// for the ocean) and renders the same image as one that builds its own; an ocean of
+    /// another seed is refused, and a shared ocean cannot be moved to another time.
+    #[test]
+    fn a_shared_ocean_is_used_as_built_and_refused_where_it_does_not_fit() {
+        let mut cfg = SceneConfig::default();
+        cfg.camera.width = 32;
+        cfg.render.spp = 1;
+        cfg.render.threads = 2;
+        cfg.render.backend = Backend::Rust;
+        let own = prepare(&cfg).unwrap();
+        let shared = |cfg: &SceneConfig| {
+            prepare_with(
+                cfg,
+                Setup {
+                    ocean: Some(Arc::clone(&own.ocean)),
+                    ..Setup::default()
+                },
+            )
+        };
+        let mut second = shared(&cfg).unwrap();
+        assert!(Arc::ptr_eq(&own.ocean, &second.ocean));
+        assert_eq!(second.seconds_ocean, 0.0);
+        let (a, b) = (
+            own.render(&cfg, false).unwrap(),
+            second.render(&cfg, false).unwrap(),
+        );
+        assert_eq!(a.film.image.pixels, b.film.image.pixels);
+        assert!(matches!(
+            second.advance_to(1.0, cfg.camera.height_m),
+            Err(RenderError::SharedOcean(_))
+        ));
+        let mut other = cfg.clone();
+        other.render.ocean_seed += 1;
+        assert!(matches!(shared(&other), Err(RenderError::SharedOcean(_))));
     }
 }

@@ -5,6 +5,7 @@
 //! renders, `stats.csv`, the plots and `summary.json`.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 use serde::Serialize;
@@ -17,7 +18,7 @@ use crate::analysis::plot;
 use crate::config::{LodConfig, NormalMode, Projection, SceneConfig};
 use crate::image_io::{auto_exposure, write_exr_with, write_json, write_png};
 use crate::render::film::{MAX_BATCHES, Samples};
-use crate::render::pipeline::{Prepared, Rendered, prepare};
+use crate::render::pipeline::{Prepared, Rendered, Setup, prepare_with};
 
 /// What to compare: one scene (ocean, sky, camera, samples) and the two tessellations.
 #[derive(Clone, Debug, Serialize)]
@@ -240,7 +241,13 @@ fn render_scenarios(
         with_lod(&job.scene, &job.low),
     );
     say(format!("low tessellation ({})", job.low.preset));
-    let low = prepare(&low_cfg)?;
+    let low = prepare_with(
+        &low_cfg,
+        Setup {
+            progress: job.progress,
+            ..Setup::default()
+        },
+    )?;
     let mut pilots = Vec::new();
     let pilot = |prepared: &Prepared, cfg: &SceneConfig, sc: Scenario| {
         let mut c = cfg.clone();
@@ -258,7 +265,15 @@ fn render_scenarios(
     }
     let mut seconds_pilot = t.elapsed().as_secs_f64();
     say(format!("high tessellation ({})", job.high.preset));
-    let high = prepare(&high_cfg)?;
+    // the same sea: the low tessellation's ocean, not a second build of it
+    let high = prepare_with(
+        &high_cfg,
+        Setup {
+            ocean: Some(Arc::clone(&low.ocean)),
+            progress: job.progress,
+            ..Setup::default()
+        },
+    )?;
     let camera = crate::render::Camera::new(
         job.scene.camera.projection,
         job.scene.camera.width,
