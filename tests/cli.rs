@@ -163,6 +163,41 @@ fn every_shipped_scene_renders_cleanly() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
+/// `--hs` and `--rms` replace the scene's height target whichever key gave it, and cannot be
+/// given together.
+#[test]
+fn a_height_flag_replaces_the_scenes_target() {
+    let (code, out, err) = vastocean(&["render", "--hs", "1.2", "--dump-config"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("hs_m = 1.2") && !out.contains("rms_m"),
+        "{out}"
+    );
+    let dir = tmp("hs");
+    let file = dir.join("hs.toml");
+    std::fs::write(&file, &out).unwrap();
+    let (code, out, err) = vastocean(&[
+        "render",
+        "--config",
+        file.to_str().unwrap(),
+        "--rms",
+        "0.3",
+        "--dump-config",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("rms_m = 0.3") && !out.contains("hs_m"),
+        "{out}"
+    );
+    let (code, _, err) = vastocean(&["render", "--hs", "1.2", "--rms", "0.3"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--hs") && err.contains("--rms"), "{err}");
+    let (code, _, err) = vastocean(&["render", "--hs", "-1", "--dump-config"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--hs (ocean.hs_m) must be"), "{err}");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
 #[test]
 fn dump_config_is_read_back_to_the_same_scene_from_a_file_or_stdin() {
     let dir = tmp("dump");

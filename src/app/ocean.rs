@@ -141,7 +141,10 @@ impl fmt::Display for OceanReport {
                 100.0 * (l.mss_lookup / l.mss_spectrum - 1.0)
             )?;
         }
-        writeln!(f, "  Hs                {:.3} m", s.hs_m)?;
+        match s.hs_target_m {
+            Some(t) => writeln!(f, "  Hs                {:.3} m (target {t:.3} m)", s.hs_m)?,
+            None => writeln!(f, "  Hs                {:.3} m", s.hs_m)?,
+        }
         writeln!(f, "  peak wavelength   {:.2} m", s.peak_wavelength_m)?;
         writeln!(f, "  folded fraction   {:.5}", s.folded_fraction)?;
         let r = &self.repeat_correlation;

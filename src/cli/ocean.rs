@@ -19,8 +19,11 @@ pub struct OceanArgs {
     #[arg(long, default_value_t = OceanParams::default().depth_m)]
     depth: f64,
     /// Scale the realization to this RMS height, m (the paper's Table 1 gives one per case).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "hs")]
     rms: Option<f64>,
+    /// Scale the realization to this significant wave height Hs = 4 x RMS, m.
+    #[arg(long)]
+    hs: Option<f64>,
     /// Layers as SIZE_M:N pairs, coarsest first, e.g. 400:512,47.3:512,5.83:256.
     #[arg(long, value_parser = parse_layers, allow_hyphen_values = true)]
     layers: Option<Layers>,
@@ -72,6 +75,7 @@ impl OceanArgs {
             ("ocean.fetch_km", "--fetch"),
             ("ocean.depth_m", "--depth"),
             ("ocean.rms_m", "--rms"),
+            ("ocean.hs_m", "--hs"),
             ("ocean.spreading_cap", "--spreading-cap"),
             ("ocean.choppiness", "--choppiness"),
             ("ocean.time_s", "--time"),
@@ -124,6 +128,7 @@ impl OceanArgs {
                 fetch_km: self.fetch,
                 depth_m: self.depth,
                 rms_m: self.rms,
+                hs_m: self.hs,
                 choppiness: self.choppiness,
                 time_s: self.time,
                 layers: self.layers.clone().map_or(defaults.layers.clone(), |l| l.0),

@@ -26,8 +26,11 @@ pub struct SceneFlags {
     #[arg(long)]
     depth: Option<f64>,
     /// Scale the ocean to this RMS wave height, m.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "hs")]
     rms: Option<f64>,
+    /// Scale the ocean to this significant wave height Hs = 4 x RMS, m.
+    #[arg(long)]
+    hs: Option<f64>,
     /// How the ocean's layers share the wavenumbers (docs/ocean.md).
     #[arg(long, value_parser = choice::<vastocean::ocean::Layering>())]
     layering: Option<vastocean::ocean::Layering>,
@@ -70,6 +73,7 @@ impl SceneFlags {
             (self.fetch.is_some(), "ocean.fetch_km", "--fetch"),
             (self.depth.is_some(), "ocean.depth_m", "--depth"),
             (self.rms.is_some(), "ocean.rms_m", "--rms"),
+            (self.hs.is_some(), "ocean.hs_m", "--hs"),
             (
                 self.spreading_cap.is_some(),
                 "ocean.spreading_cap",
@@ -112,7 +116,10 @@ impl SceneFlags {
         set(&mut s.ocean.fetch_km, self.fetch);
         set(&mut s.ocean.depth_m, self.depth);
         set(&mut s.camera.height_m, self.camera_height);
-        s.ocean.rms_m = self.rms.or(s.ocean.rms_m);
+        // a height flag replaces the file's target, whichever way the file gave it
+        if self.rms.is_some() || self.hs.is_some() {
+            (s.ocean.rms_m, s.ocean.hs_m) = (self.rms, self.hs);
+        }
         s.ocean.layering = self.layering.unwrap_or(s.ocean.layering);
         s.ocean.spreading_cap = self.spreading_cap.or(s.ocean.spreading_cap);
         s.sky.file = self.sky.clone().or(s.sky.file);

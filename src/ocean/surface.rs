@@ -250,6 +250,8 @@ pub struct OceanSummary {
     pub mss_lookup: f64,
     /// Significant wave height 4 x realization RMS, m.
     pub hs_m: f64,
+    /// The significant wave height asked for (`hs_m`, or 4 x `rms_m`), m; none without a target.
+    pub hs_target_m: Option<f64>,
     /// Factor applied to the amplitudes to reach `rms_m` (1 without a target).
     pub amplitude_scale: f64,
     /// Fraction of the summed surface with J <= 0 (same jittered grid).
@@ -290,7 +292,7 @@ impl Surface {
             .collect::<Result<Vec<_>, _>>()?;
         let variance: f64 = layers.iter().map(Layer::height_variance).sum();
         let mut amplitude_scale = 1.0;
-        if let Some(target) = params.rms_m {
+        if let Some(target) = params.rms_target() {
             if variance.is_nan() || variance <= 0.0 {
                 // The sea state, not the RMS target, is what is wrong: a wind too light or a
                 // fetch too short puts the spectrum's peak far below the finest texels.
@@ -510,6 +512,7 @@ impl Surface {
             mss_grid: layers.iter().map(|l| l.mss_grid).sum(),
             mss_lookup: self.stats.sampled_mss,
             hs_m: 4.0 * realization_var.sqrt(),
+            hs_target_m: self.params.rms_target().map(|rms| 4.0 * rms),
             amplitude_scale: self.amplitude_scale,
             folded_fraction: self.stats.folded_fraction,
             seconds: self.seconds,

@@ -236,7 +236,25 @@ fn target_rms_case(base: &OceanParams, seed: u64, target: f64, sampled_tolerance
             sum.sampled_rms_m
         );
         assert!((sum.hs_m - 4.0 * target).abs() < 1e-3);
+        assert_eq!(sum.hs_target_m, Some(4.0 * target));
     }
+    // the same target as a significant wave height: the same scale, the same surface
+    let by_hs = OceanParams {
+        rms_m: None,
+        hs_m: Some(4.0 * target),
+        ..base.clone()
+    };
+    let by_rms = OceanParams {
+        rms_m: Some(target),
+        ..base.clone()
+    };
+    let (a, b) = (
+        Surface::new(&by_hs, seed).unwrap().summary(),
+        Surface::new(&by_rms, seed).unwrap().summary(),
+    );
+    assert!((a.hs_m / (4.0 * target) - 1.0).abs() < 1e-4, "{a:?}");
+    assert_eq!(a.amplitude_scale, b.amplitude_scale);
+    assert_eq!(a.hs_target_m, Some(4.0 * target));
 }
 
 #[test]

@@ -63,7 +63,7 @@ pub struct SeaShape {
 pub fn sea_shape(ocean: &crate::config::OceanParams) -> SeaShape {
     let spectrum = crate::ocean::Spectrum::new(ocean);
     let own = spectrum.total_variance().sqrt();
-    let rms = ocean.rms_m.unwrap_or(own);
+    let rms = ocean.rms_target().unwrap_or(own);
     SeaShape {
         rescale: rms / own,
         steepness: 4.0 * rms * spectrum.peak_wavenumber() / std::f64::consts::TAU,
@@ -160,6 +160,7 @@ fn draw_case(job: &PlanJob, skies: &[String], k: usize) -> (SceneConfig, String)
             .total_variance()
             .sqrt();
         s.ocean.rms_m = Some(factor * own);
+        s.ocean.hs_m = None;
         if sea_shape(&s.ocean).steepness <= max_steepness {
             break;
         }

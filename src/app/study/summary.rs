@@ -232,7 +232,7 @@ pub fn summarize(dir: &Path) -> Result<StudySummary, AppError> {
             wind_m_s: scene.ocean.wind_speed,
             fetch_km: scene.ocean.fetch_km,
             depth_m: scene.ocean.depth_m,
-            rms_m: scene.ocean.rms_m.unwrap_or(f64::NAN),
+            rms_m: scene.ocean.rms_target().unwrap_or(f64::NAN),
             rescale: shape.rescale,
             steepness: shape.steepness,
             sky,

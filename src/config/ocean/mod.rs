@@ -100,6 +100,11 @@ pub struct OceanParams {
     /// Target RMS height, m: the realization (at `time_s`) is scaled to exactly this.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rms_m: Option<f64>,
+    /// Target significant wave height Hs, m, the other way to give the same target: Hs is the
+    /// spectral Hm0 = 4 x RMS height, so the realization is scaled to an RMS of exactly Hs / 4.
+    /// At most one of `rms_m` and `hs_m`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hs_m: Option<f64>,
     /// Direction the wind blows towards, degrees from +x towards +z.
     pub wind_dir_deg: f64,
     /// JONSWAP peak enhancement (TMA, JONSWAP).
@@ -122,6 +127,14 @@ pub struct OceanParams {
     pub interp: Interp,
 }
 
+impl OceanParams {
+    /// The RMS height the realization is scaled to: `rms_m`, or `hs_m` / 4; none without a
+    /// target.
+    pub fn rms_target(&self) -> Option<f64> {
+        self.rms_m.or(self.hs_m.map(|hs| hs / 4.0))
+    }
+}
+
 impl Default for OceanParams {
     fn default() -> Self {
         OceanParams {
@@ -129,6 +142,7 @@ impl Default for OceanParams {
             fetch_km: 204.5,
             depth_m: 997.9,
             rms_m: Some(0.225),
+            hs_m: None,
             wind_dir_deg: 0.0,
             gamma: 3.3,
             choppiness: 1.0,
@@ -266,6 +280,21 @@ impl OceanParams {
                 RMS_MAX_M,
                 "m, a significant wave height of 100 m; the highest measured is about 19 m",
             )?;
+        }
+        if let Some(hs) = self.hs_m {
+            positive_at_most(
+                "hs_m",
+                hs,
+                4.0 * RMS_MAX_M,
+                "m; the highest measured is about 19 m",
+            )?;
+            if self.rms_m.is_some() {
+                return Err(invalid(
+                    "ocean.hs_m",
+                    "given without ocean.rms_m (both set the wave height: Hs = 4 x RMS; keep one)",
+                    hs,
+                ));
+            }
         }
         finite("wind_dir_deg", self.wind_dir_deg)?;
         if !self.gamma.is_finite() || self.gamma < 1.0 {
@@ -475,6 +504,28 @@ mod tests {
         let l = p.layers.last().unwrap();
         let dx = l.size_m / l.n as f64;
         assert!((0.02..=0.03).contains(&dx), "{dx}");
+    }
+
+    #[test]
+    fn a_height_target_is_given_once_as_rms_or_as_hs() {
+        let hs = OceanParams {
+            rms_m: None,
+            hs_m: Some(1.2),
+            ..OceanParams::default()
+        };
+        hs.validate().unwrap();
+        assert_eq!(hs.rms_target(), Some(0.3));
+        assert_eq!(OceanParams::default().rms_target(), Some(0.225));
+        let e = err_of(|p| p.hs_m = Some(1.2));
+        assert!(
+            e.starts_with("ocean.hs_m must be given without ocean.rms_m"),
+            "{e}"
+        );
+        let e = err_of(|p| {
+            p.rms_m = None;
+            p.hs_m = Some(-1.0)
+        });
+        assert!(e.starts_with("ocean.hs_m must be finite and > 0"), "{e}");
     }
 
     #[test]
