@@ -69,7 +69,7 @@ pub fn run(job: &OceanJob) -> Result<OceanReport, AppError> {
         super::check_outputs(std::slice::from_ref(path))?;
     }
     let surface = Surface::new(&job.params, job.seed)?;
-    let summary = surface.summary();
+    let summary = surface.summary().clone();
     let sampler = surface.sampler([0.0, 0.0]);
     let repeat_correlation = repeat_correlation(&sampler, job.params.wind_dir_deg);
     let range_notes = surface

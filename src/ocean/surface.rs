@@ -14,6 +14,7 @@
 //! frame (eq. 7's dX/dx x dX/dz would point down). Its unnormalised y component equals J, so
 //! the normal tips below the horizon exactly where the surface is folded.
 
+use std::sync::OnceLock;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -36,6 +37,9 @@ pub struct Surface {
     amplitude_scale: f64,
     seconds: f64,
     stats: Stats,
+    /// [`Surface::summary`], computed on first use (62 ms for the default ocean: band integrals
+    /// of the spectrum and passes over every texel) and kept until the time changes.
+    summary: OnceLock<OceanSummary>,
 }
 
 /// What [`Surface::update_stats`] measures of the surface at its time.
@@ -323,6 +327,7 @@ impl Surface {
             amplitude_scale,
             seconds: 0.0,
             stats: Stats::default(),
+            summary: OnceLock::new(),
         };
         surface.update_stats();
         surface.seconds = start.elapsed().as_secs_f64();
@@ -344,6 +349,7 @@ impl Surface {
             amplitude_scale: 0.0,
             seconds: 0.0,
             stats: Stats::default(),
+            summary: OnceLock::new(),
         }
     }
 
@@ -407,6 +413,7 @@ impl Surface {
     /// there and over its grid points; rows are summed in order so the result is thread-count
     /// free.
     fn update_stats(&mut self) {
+        self.summary = OnceLock::new();
         let Some(l0) = self.layers.first() else {
             return;
         };
@@ -462,8 +469,12 @@ impl Surface {
         };
     }
 
-    /// Generation statistics (see [`OceanSummary`]).
-    pub fn summary(&self) -> OceanSummary {
+    /// Generation statistics (see [`OceanSummary`]), computed once per ocean time.
+    pub fn summary(&self) -> &OceanSummary {
+        self.summary.get_or_init(|| self.compute_summary())
+    }
+
+    fn compute_summary(&self) -> OceanSummary {
         let partition = self.params.partition();
         let layers: Vec<LayerSummary> = self
             .layers

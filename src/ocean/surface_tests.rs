@@ -249,8 +249,8 @@ fn target_rms_case(base: &OceanParams, seed: u64, target: f64, sampled_tolerance
         ..base.clone()
     };
     let (a, b) = (
-        Surface::new(&by_hs, seed).unwrap().summary(),
-        Surface::new(&by_rms, seed).unwrap().summary(),
+        Surface::new(&by_hs, seed).unwrap().summary().clone(),
+        Surface::new(&by_rms, seed).unwrap().summary().clone(),
     );
     assert!((a.hs_m / (4.0 * target) - 1.0).abs() < 1e-4, "{a:?}");
     assert_eq!(a.amplitude_scale, b.amplitude_scale);
@@ -391,7 +391,10 @@ fn layers_sum_and_set_time_moves_waves() {
         assert!((sum[j] - by_hand[j]).abs() < 1e-5 * (1.0 + by_hand[j].abs()));
     }
     let before = s.sampler([0.0, 0.0]).sample(1.0, 1.0);
+    let summary_before = s.summary().clone();
     s.set_time(2.0).unwrap();
+    // the summary kept from time 0 is not served at time 2
+    assert_ne!(s.summary().mss_lookup, summary_before.mss_lookup);
     assert!(
         s.set_time(f64::NAN)
             .unwrap_err()
@@ -416,7 +419,7 @@ fn mean_square_slope_of_the_spectrum_the_grid_and_the_lookup() {
             interp,
             ..OceanParams::default()
         };
-        Surface::new(&p, 3).unwrap().summary()
+        Surface::new(&p, 3).unwrap().summary().clone()
     };
     let (bilinear, bicubic) = (read(Interp::Bilinear), read(Interp::Bicubic));
     for s in [&bilinear, &bicubic] {
