@@ -15,8 +15,9 @@ use crate::ocean::{OceanParams, OceanSummary, Surface, write_preview_png};
 pub struct OceanJob {
     pub params: OceanParams,
     pub seed: u64,
-    /// Write the preview here, covering this many metres (default: the coarsest layer).
-    pub png: Option<(PathBuf, Option<f64>)>,
+    /// Write the preview here, covering this many metres (default: the coarsest layer), each of
+    /// its two panels this many pixels square.
+    pub png: Option<(PathBuf, Option<f64>, u32)>,
     /// Write the surface along a line here: from (x0, z0) to (x1, z1), world metres, n points.
     pub profile: Option<(PathBuf, [f64; 2], [f64; 2], usize)>,
 }
@@ -57,7 +58,7 @@ impl super::Remarks for OceanReport {
 
 pub fn run(job: &OceanJob) -> Result<OceanReport, AppError> {
     job.params.validate()?;
-    if let Some((path, _)) = &job.png {
+    if let Some((path, ..)) = &job.png {
         super::check_outputs(std::slice::from_ref(path))?;
     }
     if let Some((path, from, to, n)) = &job.profile {
@@ -79,9 +80,9 @@ pub fn run(job: &OceanJob) -> Result<OceanReport, AppError> {
         let csv = profile_csv(&sampler, *from, *to, *n);
         crate::image_io::write_atomically(path, |w| std::io::Write::write_all(w, csv.as_bytes()))?;
     }
-    if let Some((path, extent)) = &job.png {
+    if let Some((path, extent, size)) = &job.png {
         let extent = extent.unwrap_or(job.params.layers[0].size_m);
-        write_preview_png(&surface, path, 1024, extent)?;
+        write_preview_png(&surface, path, *size, extent)?;
     }
     Ok(OceanReport {
         summary,
@@ -95,9 +96,13 @@ pub fn run(job: &OceanJob) -> Result<OceanReport, AppError> {
 impl fmt::Display for OceanReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let (p, s) = (&self.params, &self.summary);
+        let preset = p.preset().and_then(|q| Some((q, q.row()?)));
+        if let Some((q, row)) = preset {
+            writeln!(f, "sea state: {q} ({})", row.name)?;
+        }
         writeln!(
             f,
-            "ocean: wind {} m/s, fetch {} km, depth {} m, seed {}",
+            "ocean: wind {:.4} m/s, fetch {:.4} km, depth {} m, seed {}",
             p.wind_speed, p.fetch_km, p.depth_m, s.seed
         )?;
         writeln!(
@@ -144,6 +149,20 @@ impl fmt::Display for OceanReport {
         match s.hs_target_m {
             Some(t) => writeln!(f, "  Hs                {:.3} m (target {t:.3} m)", s.hs_m)?,
             None => writeln!(f, "  Hs                {:.3} m", s.hs_m)?,
+        }
+        if s.partitions.len() > 1 {
+            for q in &s.partitions {
+                writeln!(
+                    f,
+                    "    {:<9} Hs {:.3} m ({:.0} % of the variance), peak {:.1} s / {:.1} m, towards {:.0} deg",
+                    q.name,
+                    q.hs_m,
+                    100.0 * q.variance_share,
+                    q.peak_period_s,
+                    q.peak_wavelength_m,
+                    q.direction_deg
+                )?;
+            }
         }
         writeln!(f, "  peak wavelength   {:.2} m", s.peak_wavelength_m)?;
         writeln!(f, "  folded fraction   {:.5}", s.folded_fraction)?;

@@ -225,3 +225,21 @@ pub fn threads_arg(s: &str) -> Result<usize, String> {
     vastocean::config::check_threads("--threads", n).map_err(|e| e.to_string())?;
     Ok(n)
 }
+
+/// Parses `--swell HS:TP[:DIR[:S]]` (the ranges are the scene's validation's to check).
+pub fn parse_swell(s: &str) -> Result<vastocean::ocean::SwellParams, String> {
+    let bad = || format!("a swell is HS:TP[:DIR[:S]], e.g. 1.5:11:90 (got `{s}`)");
+    let v = s
+        .split(':')
+        .map(|x| x.trim().parse::<f64>().map_err(|_| bad()))
+        .collect::<Result<Vec<f64>, String>>()?;
+    if !(2..=4).contains(&v.len()) {
+        return Err(bad());
+    }
+    let mut swell =
+        vastocean::ocean::SwellParams::new(v[0], v[1], v.get(2).copied().unwrap_or(0.0));
+    if let Some(&spread) = v.get(3) {
+        swell.spreading_s = spread;
+    }
+    Ok(swell)
+}

@@ -24,6 +24,25 @@ pub struct OceanArgs {
     /// Scale the realization to this significant wave height Hs = 4 x RMS, m.
     #[arg(long)]
     hs: Option<f64>,
+    /// Peak period of the wind sea, s, instead of the fetch law's (with --hs or --rms).
+    #[arg(long)]
+    tp: Option<f64>,
+    /// JONSWAP peak enhancement gamma of the wind sea.
+    #[arg(long, default_value_t = OceanParams::default().gamma)]
+    gamma: f64,
+    /// A Beaufort force 1-12: sets the wind, fetch and height (docs/ocean.md, "Sea states").
+    #[arg(long, conflicts_with_all = ["wind", "fetch", "rms", "hs", "tp", "douglas"])]
+    beaufort: Option<u8>,
+    /// A Douglas sea state 1-9: sets the wind, fetch and height (docs/ocean.md, "Sea states").
+    #[arg(long, conflicts_with_all = ["wind", "fetch", "rms", "hs", "tp"])]
+    douglas: Option<u8>,
+    /// A swell HS:TP[:DIR[:S]] (m, s, degrees it travels towards, cos-2s exponent; default 0
+    /// and 25) added to the wind sea; repeat for more.
+    #[arg(long, value_parser = super::parse_swell, allow_hyphen_values = true)]
+    swell: Vec<vastocean::ocean::SwellParams>,
+    /// Direction the wind blows towards, degrees from +x towards +z.
+    #[arg(long, default_value_t = OceanParams::default().wind_dir_deg)]
+    wind_dir: f64,
     /// Layers as SIZE_M:N pairs, coarsest first, e.g. 400:512,47.3:512,5.83:256.
     #[arg(long, value_parser = parse_layers, allow_hyphen_values = true)]
     layers: Option<Layers>,
@@ -54,6 +73,9 @@ pub struct OceanArgs {
     /// Preview extent, metres (default: the coarsest layer's size).
     #[arg(long)]
     png_extent: Option<f64>,
+    /// Preview size: each of its two panels (height, shaded normals) is PX x PX pixels.
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(16..=8192), requires = "png")]
+    png_size: u32,
     /// Sample the surface along a line X0,Z0,X1,Z1,N (world metres, N points) into --csv: x, z,
     /// h, Dx, Dz and the normal, to check the repeat correlation independently.
     #[arg(long, value_parser = parse_profile, requires = "csv", allow_hyphen_values = true)]
@@ -76,6 +98,12 @@ impl OceanArgs {
             ("ocean.depth_m", "--depth"),
             ("ocean.rms_m", "--rms"),
             ("ocean.hs_m", "--hs"),
+            ("ocean.tp_s", "--tp"),
+            ("ocean.gamma", "--gamma"),
+            ("ocean.beaufort", "--beaufort"),
+            ("ocean.douglas", "--douglas"),
+            ("ocean.swell", "--swell"),
+            ("ocean.wind_dir_deg", "--wind-dir"),
             ("ocean.spreading_cap", "--spreading-cap"),
             ("ocean.choppiness", "--choppiness"),
             ("ocean.time_s", "--time"),
@@ -122,23 +150,34 @@ fn parse_layers(s: &str) -> Result<Layers, String> {
 impl OceanArgs {
     pub fn job(&self) -> app::ocean::OceanJob {
         let defaults = OceanParams::default();
+        let mut params = OceanParams {
+            wind_speed: self.wind,
+            fetch_km: self.fetch,
+            depth_m: self.depth,
+            rms_m: self.rms,
+            hs_m: self.hs,
+            tp_s: self.tp,
+            gamma: self.gamma,
+            beaufort: self.beaufort,
+            douglas: self.douglas,
+            swell: self.swell.clone(),
+            wind_dir_deg: self.wind_dir,
+            choppiness: self.choppiness,
+            time_s: self.time,
+            layers: self.layers.clone().map_or(defaults.layers.clone(), |l| l.0),
+            layering: self.layering,
+            spreading_cap: self.spreading_cap,
+            interp: self.interp,
+            ..defaults
+        };
+        params.apply_preset();
         app::ocean::OceanJob {
-            params: OceanParams {
-                wind_speed: self.wind,
-                fetch_km: self.fetch,
-                depth_m: self.depth,
-                rms_m: self.rms,
-                hs_m: self.hs,
-                choppiness: self.choppiness,
-                time_s: self.time,
-                layers: self.layers.clone().map_or(defaults.layers.clone(), |l| l.0),
-                layering: self.layering,
-                spreading_cap: self.spreading_cap,
-                interp: self.interp,
-                ..defaults
-            },
+            params,
             seed: self.seed,
-            png: self.png.clone().map(|p| (p, self.png_extent)),
+            png: self
+                .png
+                .clone()
+                .map(|p| (p, self.png_extent, self.png_size)),
             profile: match (&self.profile, &self.csv) {
                 (Some((from, to, n)), Some(csv)) => Some((csv.clone(), *from, *to, *n)),
                 _ => None,

@@ -31,6 +31,19 @@ pub struct SceneFlags {
     /// Scale the ocean to this significant wave height Hs = 4 x RMS, m.
     #[arg(long)]
     hs: Option<f64>,
+    /// Peak period of the wind sea, s, instead of the fetch law's (with a height target).
+    #[arg(long)]
+    tp: Option<f64>,
+    /// A Beaufort force 1-12: sets the wind, fetch and height (docs/ocean.md, "Sea states").
+    #[arg(long, conflicts_with_all = ["wind", "fetch", "rms", "hs", "tp", "douglas"])]
+    beaufort: Option<u8>,
+    /// A Douglas sea state 1-9: sets the wind, fetch and height (docs/ocean.md, "Sea states").
+    #[arg(long, conflicts_with_all = ["wind", "fetch", "rms", "hs", "tp"])]
+    douglas: Option<u8>,
+    /// A swell HS:TP[:DIR[:S]] (m, s, degrees it travels towards, cos-2s exponent; default 0
+    /// and 25) added to the wind sea, replacing the scene's; repeat for more.
+    #[arg(long, value_parser = super::parse_swell, allow_hyphen_values = true)]
+    swell: Vec<vastocean::ocean::SwellParams>,
     /// How the ocean's layers share the wavenumbers (docs/ocean.md).
     #[arg(long, value_parser = choice::<vastocean::ocean::Layering>())]
     layering: Option<vastocean::ocean::Layering>,
@@ -74,6 +87,10 @@ impl SceneFlags {
             (self.depth.is_some(), "ocean.depth_m", "--depth"),
             (self.rms.is_some(), "ocean.rms_m", "--rms"),
             (self.hs.is_some(), "ocean.hs_m", "--hs"),
+            (self.tp.is_some(), "ocean.tp_s", "--tp"),
+            (self.beaufort.is_some(), "ocean.beaufort", "--beaufort"),
+            (self.douglas.is_some(), "ocean.douglas", "--douglas"),
+            (!self.swell.is_empty(), "ocean.swell", "--swell"),
             (
                 self.spreading_cap.is_some(),
                 "ocean.spreading_cap",
@@ -119,6 +136,22 @@ impl SceneFlags {
         // a height flag replaces the file's target, whichever way the file gave it
         if self.rms.is_some() || self.hs.is_some() {
             (s.ocean.rms_m, s.ocean.hs_m) = (self.rms, self.hs);
+        }
+        s.ocean.tp_s = self.tp.or(s.ocean.tp_s);
+        // A preset flag replaces the scene's sea; swell flags replace the scene's own swells
+        // (a scene preset's background swell stays first).
+        if self.beaufort.is_some() || self.douglas.is_some() || !self.swell.is_empty() {
+            let mut preset = (s.ocean.beaufort, s.ocean.douglas);
+            s.ocean.clear_preset();
+            if self.beaufort.is_some() || self.douglas.is_some() {
+                preset = (self.beaufort, self.douglas);
+                (s.ocean.rms_m, s.ocean.hs_m, s.ocean.tp_s) = (None, None, None);
+            }
+            if !self.swell.is_empty() {
+                s.ocean.swell = self.swell.clone();
+            }
+            (s.ocean.beaufort, s.ocean.douglas) = preset;
+            s.ocean.apply_preset();
         }
         s.ocean.layering = self.layering.unwrap_or(s.ocean.layering);
         s.ocean.spreading_cap = self.spreading_cap.or(s.ocean.spreading_cap);

@@ -194,10 +194,29 @@ impl SceneConfig {
         } else {
             path
         };
-        let mut cfg: SceneConfig = toml::from_str(&text).map_err(|e| ConfigError::Parse {
+        let parse_error = |e: toml::de::Error| ConfigError::Parse {
             path: shown.into(),
             message: e.to_string(),
-        })?;
+        };
+        let mut cfg: SceneConfig = toml::from_str(&text).map_err(parse_error)?;
+        // A preset sets the sea's explicit keys; a file that gives one beside it is ambiguous.
+        if let Some(preset) = cfg.ocean.preset() {
+            let table: toml::Table = text.parse().map_err(parse_error)?;
+            let given = table.get("ocean").and_then(|o| o.as_table());
+            if let Some(key) = ocean::sea_state::PRESET_KEYS
+                .iter()
+                .find(|k| given.is_some_and(|o| o.contains_key(**k)))
+            {
+                return Err(invalid(
+                    &format!("ocean.{key}"),
+                    &format!("left out beside {preset}, which sets it (keep one)"),
+                    given
+                        .and_then(|o| o.get(*key))
+                        .map_or(String::new(), |v| v.to_string()),
+                ));
+            }
+            cfg.ocean.apply_preset();
+        }
         // A file's relative paths are relative to the file; stdin's to the working directory.
         if let (Some(f), Some(dir), false) = (&cfg.sky.file, path.parent(), from_stdin)
             && f.is_relative()
@@ -211,6 +230,9 @@ impl SceneConfig {
     /// folder: every key written out, the sky map's path made absolute.
     pub fn to_toml(&self) -> Result<String, toml::ser::Error> {
         let mut c = self.clone();
+        // the preset's sea is written out key by key, its swell too (a file with both a preset
+        // and the keys it sets is refused)
+        (c.ocean.beaufort, c.ocean.douglas) = (None, None);
         if let Some(f) = &c.sky.file {
             c.sky.file = Some(std::path::absolute(f).unwrap_or_else(|_| f.clone()));
         }

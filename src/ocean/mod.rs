@@ -13,12 +13,13 @@ pub mod spectrum;
 pub mod surface;
 
 pub use crate::config::ocean::{
-    Interp, LayerSpec, Layering, MAX_LAYERS, OceanParams, Partition, SpectrumKind, SpreadingKind,
+    Interp, LayerSpec, Layering, MAX_LAYERS, OceanParams, Partition, Preset, SpectrumKind,
+    SpreadingKind, SwellParams, nyquist,
 };
 pub use layer::{FIELD_COUNT, Layer, Texel, field, jacobian};
 pub use preview::write_preview_png;
 pub use spectrum::{G, Spectrum};
-pub use surface::{LayerSummary, OceanSummary, Sample, Sampler, Surface};
+pub use surface::{LayerSummary, OceanSummary, PartitionSummary, Sample, Sampler, Surface};
 
 /// Errors of the ocean model. `Invalid` names the parameter as it appears in a config file.
 #[derive(Debug, thiserror::Error)]

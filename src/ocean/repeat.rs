@@ -132,19 +132,26 @@ pub fn correlation_by_lag(sampler: &Sampler, dx: f64, dz: f64) -> Vec<f64> {
 /// (`dx`, `dz`).
 pub fn repeat_along(sampler: &Sampler, dx: f64, dz: f64) -> RepeatPeak {
     let r = correlation_by_lag(sampler, dx, dz);
-    let first = (MIN_LAG_M / STEP_M) as usize;
-    let max = r[first..].iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    // A periodic surface correlates almost equally at every multiple of its period: name the
-    // shortest local maximum within 0.005 of the largest correlation.
-    let lag = (first..r.len())
-        .find(|&i| {
-            r[i] >= max - 0.005 && r[i] >= r[i - 1] && r.get(i + 1).is_none_or(|&next| r[i] >= next)
-        })
-        .expect("the largest correlation is a local maximum");
+    let lag = peak_lag(&r, (MIN_LAG_M / STEP_M) as usize);
     RepeatPeak {
         correlation: r[lag],
         lag_m: lag as f64 * STEP_M,
     }
+}
+
+/// The index of r's largest value from `first` on (see [`repeat_along`]).
+fn peak_lag(r: &[f64], first: usize) -> usize {
+    let max = r[first..].iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    // A periodic surface correlates almost equally at every multiple of its period: name the
+    // shortest local maximum within 0.005 of the largest correlation. The range's ends count
+    // as maxima on their open side (a long-wave sea still falls off at the shortest lag).
+    (first..r.len())
+        .find(|&i| {
+            r[i] >= max - 0.005
+                && (i == first || r[i] >= r[i - 1])
+                && r.get(i + 1).is_none_or(|&next| r[i] >= next)
+        })
+        .unwrap_or(first)
 }
 
 /// The repeat metric along the wind (blowing towards `wind_dir_deg`) and across it.
@@ -226,6 +233,18 @@ mod tests {
         let long = surface(&[(16_384.0, 2048)]);
         let r = repeat_correlation(&long.sampler([0.0, 0.0]), 0.0);
         assert!(r.max < 0.08, "{r:?}");
+    }
+
+    #[test]
+    fn the_peak_may_sit_at_the_shortest_lag() {
+        // a sea of long waves still decorrelating at the shortest lag (a Beaufort 9 sea)
+        let falling: Vec<f64> = (0..100).map(|i| 1.0 - 0.01 * i as f64).collect();
+        assert_eq!(peak_lag(&falling, 30), 30);
+        // the shortest of two near-equal maxima
+        let mut two = vec![0.0; 100];
+        (two[40], two[80]) = (0.5, 0.503);
+        assert_eq!(peak_lag(&two, 30), 40);
+        assert_eq!(peak_lag(&[f64::NAN; 10], 3), 3);
     }
 
     #[test]

@@ -10,7 +10,7 @@
 
 use std::f64::consts::{PI, TAU};
 
-use super::{OceanParams, SpectrumKind, SpreadingKind};
+use super::{OceanParams, SpectrumKind, SpreadingKind, SwellParams};
 
 /// Standard gravity, m/s^2.
 pub const G: f64 = 9.81;
@@ -187,7 +187,59 @@ fn wrap_angle(a: f64) -> f64 {
     (a + PI).rem_euclid(TAU) - PI
 }
 
+/// One swell partition: JONSWAP S(omega) (times the depth factor under TMA) with its own level,
+/// peak and enhancement, spread by cos-2s of a fixed exponent around its direction.
+#[derive(Clone, Debug)]
+pub struct SwellSpectrum {
+    /// Energy level of its JONSWAP, scaled so the partition holds its asked share (see
+    /// [`Spectrum::new`]).
+    pub alpha: f64,
+    pub omega_p: f64,
+    pub gamma: f64,
+    /// Direction it travels towards, radians from +x towards +z.
+    pub dir_rad: f64,
+    /// cos-2s exponent.
+    pub s: f64,
+    /// ln of cos-2s's normalisation Q(s), computed once.
+    ln_q: f64,
+    /// The significant wave height asked for, m.
+    pub hs_m: f64,
+}
+
+impl SwellSpectrum {
+    fn new(p: &SwellParams) -> SwellSpectrum {
+        let s = p.spreading_s;
+        SwellSpectrum {
+            alpha: 1.0,
+            omega_p: TAU / p.tp_s,
+            gamma: p.gamma,
+            dir_rad: p.dir_deg.to_radians(),
+            s,
+            ln_q: (2.0 * s - 1.0) * 2f64.ln() - PI.ln() + 2.0 * ln_gamma(s + 1.0)
+                - ln_gamma(2.0 * s + 1.0),
+            hs_m: p.hs_m,
+        }
+    }
+
+    /// Its cos-2s spreading at wave direction `theta_k` (radians from +x towards +z).
+    fn spreading_at(&self, theta_k: f64) -> f64 {
+        let c = (0.5 * wrap_angle(theta_k - self.dir_rad)).cos().abs();
+        if c == 0.0 {
+            return 0.0;
+        }
+        (self.ln_q + 2.0 * self.s * c.ln()).exp()
+    }
+}
+
+/// Which partition of a sea state: the wind sea or swell i.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Part {
+    Wind,
+    Swell(usize),
+}
+
 /// A sea state: S(omega), D(theta; omega) and the dispersion relation, ready to give P(k).
+/// The wind sea and any swells add up (linear waves superpose).
 #[derive(Clone, Debug)]
 pub struct Spectrum {
     pub kind: SpectrumKind,
@@ -209,6 +261,9 @@ pub struct Spectrum {
     /// Mitsuyasu's exponent at the peak as published, computed once (every cell of every
     /// layer needs it twice).
     mitsuyasu_peak: f64,
+    /// Whether the peak comes from the fetch law (not from `tp_s`).
+    fetch_law: bool,
+    pub swells: Vec<SwellSpectrum>,
 }
 
 impl Spectrum {
@@ -216,9 +271,11 @@ impl Spectrum {
     pub fn new(params: &OceanParams) -> Spectrum {
         let u = params.wind_speed;
         let fetch_m = params.fetch_km * 1000.0;
+        let mut spectrum;
         let (alpha, omega_p, omega_cut) = match params.spectrum {
             SpectrumKind::Tma | SpectrumKind::Jonswap => {
                 let (a, wp) = jonswap_parameters(u, fetch_m);
+                let wp = params.tp_s.map_or(wp, |tp| TAU / tp);
                 (a, wp, wp)
             }
             // omega_p = 0.855 g / U10 (Horvath 2015 eq. 21)
@@ -227,7 +284,7 @@ impl Spectrum {
             // omega^-5 exp(-(w0/omega)^4) is at (4/5)^(1/4) w0.
             SpectrumKind::Phillips => (PHILLIPS_ALPHA, 0.8f64.powf(0.25) * G / u, G / u),
         };
-        Spectrum {
+        spectrum = Spectrum {
             kind: params.spectrum,
             spreading: params.spreading,
             wind_speed: u,
@@ -240,12 +297,45 @@ impl Spectrum {
             omega_cut,
             spreading_cap: params.spreading_cap.unwrap_or(f64::INFINITY),
             mitsuyasu_peak: mitsuyasu_peak(omega_p, u),
+            fetch_law: params.tp_s.is_none(),
+            swells: Vec::new(),
+        };
+        spectrum.add_swells(params);
+        spectrum
+    }
+
+    /// Adds the swells of `params`, each at the level that gives it its asked Hs over the
+    /// wavenumbers the layers resolve, relative to the wind sea: with a wind-sea target the
+    /// swells' levels are set so the partitions' variances stand as the targets do (the
+    /// realization is then scaled to the total), without one each swell holds its Hs outright.
+    fn add_swells(&mut self, params: &OceanParams) {
+        if params.swell.is_empty() {
+            return;
+        }
+        let (k_lo, k_hi) = match (params.layers.first(), params.layers.last()) {
+            (Some(first), Some(last)) => (PI / first.size_m, super::nyquist(last)),
+            _ => (0.0, f64::INFINITY),
+        };
+        self.swells = params.swell.iter().map(SwellSpectrum::new).collect();
+        let wind = self.part_variance(Part::Wind, k_lo, k_hi, |_| 1.0);
+        let relative = match params.wind_rms_target() {
+            Some(t) if wind > 0.0 => wind / (t * t),
+            _ => 1.0,
+        };
+        for i in 0..self.swells.len() {
+            let unit = self.part_variance(Part::Swell(i), k_lo, k_hi, |_| 1.0);
+            let asked = (self.swells[i].hs_m / 4.0).powi(2);
+            self.swells[i].alpha = if unit > 0.0 {
+                asked / unit * relative
+            } else {
+                0.0
+            };
         }
     }
 
     /// The dimensionless fetch g F / U^2 (TMA and JONSWAP; `None` for the others).
     pub fn dimensionless_fetch(&self) -> Option<f64> {
-        matches!(self.kind, SpectrumKind::Tma | SpectrumKind::Jonswap)
+        (self.fetch_law && matches!(self.kind, SpectrumKind::Tma | SpectrumKind::Jonswap))
             .then(|| G * self.fetch_m / (self.wind_speed * self.wind_speed))
     }
 
@@ -281,8 +371,37 @@ impl Spectrum {
         w
     }
 
-    /// Frequency spectrum S(omega), m^2 s: the variance is its integral over omega > 0.
+    /// Frequency spectrum S(omega) of the whole sea, m^2 s: the variance is its integral over
+    /// omega > 0.
     pub fn s_omega(&self, omega: f64) -> f64 {
+        let wind = self.wind_s_omega(omega);
+        if self.swells.is_empty() {
+            return wind;
+        }
+        wind + (0..self.swells.len())
+            .map(|i| self.swell_s_omega(i, omega))
+            .sum::<f64>()
+    }
+
+    /// S(omega) of one partition.
+    pub fn part_s_omega(&self, part: Part, omega: f64) -> f64 {
+        match part {
+            Part::Wind => self.wind_s_omega(omega),
+            Part::Swell(i) => self.swell_s_omega(i, omega),
+        }
+    }
+
+    fn swell_s_omega(&self, i: usize, omega: f64) -> f64 {
+        let sw = &self.swells[i];
+        let s = jonswap(omega, sw.alpha, sw.omega_p, sw.gamma);
+        if self.kind == SpectrumKind::Tma {
+            s * kitaigorodskii(omega * (self.depth_m / G).sqrt())
+        } else {
+            s
+        }
+    }
+
+    fn wind_s_omega(&self, omega: f64) -> f64 {
         match self.kind {
             SpectrumKind::Jonswap => jonswap(omega, self.alpha, self.omega_p, self.gamma),
             SpectrumKind::Tma => {
@@ -306,6 +425,16 @@ impl Spectrum {
     /// limit (cos^2s ~ exp(-s theta^2 / 4): sqrt(2 / s); sech^2(beta theta): pi / (2 sqrt(3) beta)),
     /// for choosing how finely a grid cell must be integrated.
     pub fn spreading_width(&self, omega: f64) -> f64 {
+        // a swell's cos-2s is as narrow at every frequency
+        let swell = self
+            .swells
+            .iter()
+            .map(|s| (2.0 / s.s).sqrt().min(PI))
+            .fold(PI, f64::min);
+        swell.min(self.wind_spreading_width(omega))
+    }
+
+    fn wind_spreading_width(&self, omega: f64) -> f64 {
         match self.spreading {
             SpreadingKind::Mitsuyasu => {
                 let s = mitsuyasu_s_from_peak(omega, self.omega_p, self.mitsuyasu_peak)
@@ -355,12 +484,22 @@ impl Spectrum {
 
     /// [`Spectrum::p_k`] where |k| = `k` > 0 and `omega` = omega(k) are already known.
     pub(crate) fn p_k_at(&self, kx: f64, kz: f64, k: f64, omega: f64) -> f64 {
-        let s = self.s_omega(omega);
-        if s == 0.0 {
+        let theta_k = kz.atan2(kx);
+        let s = self.wind_s_omega(omega);
+        let mut p = 0.0;
+        if s != 0.0 {
+            p = s * self.spreading_at(omega, wrap_angle(theta_k - self.wind_dir_rad));
+        }
+        for (i, sw) in self.swells.iter().enumerate() {
+            let s = self.swell_s_omega(i, omega);
+            if s != 0.0 {
+                p += s * sw.spreading_at(theta_k);
+            }
+        }
+        if p == 0.0 {
             return 0.0;
         }
-        let theta = wrap_angle(kz.atan2(kx) - self.wind_dir_rad);
-        s * self.spreading_at(omega, theta) * group_velocity(k, self.depth_m) / k
+        p * group_velocity(k, self.depth_m) / k
     }
 
     /// Wavenumber of the spectral peak, rad/m.
@@ -378,14 +517,42 @@ impl Spectrum {
     /// Integral of weight(|k|) P(k) over the annulus k_min <= |k| < k_max, m^2 (a layer's share
     /// under `OceanParams::partition`).
     pub fn weighted_variance(&self, k_min: f64, k_max: f64, weight: impl Fn(f64) -> f64) -> f64 {
-        let lo = self.omega(k_min).max(0.05 * self.omega_cut);
-        // above 1e4 omega_p the omega^-5 tail holds 1e-16 of the variance
-        let hi = self.omega(k_max).min(1e4 * self.omega_p);
+        self.integrate(|w| self.s_omega(w), k_min, k_max, weight)
+    }
+
+    /// [`Spectrum::weighted_variance`] of one partition alone.
+    pub fn part_variance(
+        &self,
+        part: Part,
+        k_min: f64,
+        k_max: f64,
+        weight: impl Fn(f64) -> f64,
+    ) -> f64 {
+        self.integrate(|w| self.part_s_omega(part, w), k_min, k_max, weight)
+    }
+
+    fn integrate(
+        &self,
+        s: impl Fn(f64) -> f64,
+        k_min: f64,
+        k_max: f64,
+        weight: impl Fn(f64) -> f64,
+    ) -> f64 {
+        // below 0.05 of a peak the spectrum holds nothing; above 1e4 peaks the omega^-5 tail
+        // holds 1e-16 of the variance
+        let (cut, peak) = self
+            .swells
+            .iter()
+            .fold((self.omega_cut, self.omega_p), |(c, p), s| {
+                (c.min(s.omega_p), p.max(s.omega_p))
+            });
+        let lo = self.omega(k_min).max(0.05 * cut);
+        let hi = self.omega(k_max).min(1e4 * peak);
         if hi.is_nan() || lo.is_nan() || hi <= lo {
             return 0.0;
         }
         integrate_log(
-            |w| self.s_omega(w) * weight(wavenumber(w, self.depth_m)),
+            |w| s(w) * weight(wavenumber(w, self.depth_m)),
             lo,
             hi,
             0.005,

@@ -1,4 +1,5 @@
 use super::*;
+use crate::ocean::SwellParams;
 
 fn case22(kind: SpectrumKind) -> OceanParams {
     OceanParams {
@@ -191,4 +192,64 @@ fn energy_is_downwind() {
     // wind towards +z
     assert!(s.p_k(0.0, k) > 100.0 * s.p_k(k, 0.0));
     assert!(s.p_k(0.0, k) > 100.0 * s.p_k(0.0, -k));
+}
+
+#[test]
+fn a_swell_holds_its_height_over_the_layers_and_spreads_around_its_direction() {
+    // no wind-sea target: the swell holds its Hs outright over the layers' wavenumbers
+    let p = OceanParams {
+        rms_m: None,
+        swell: vec![SwellParams {
+            hs_m: 2.0,
+            tp_s: 12.0,
+            dir_deg: 120.0,
+            spreading_s: 40.0,
+            gamma: 5.0,
+        }],
+        ..OceanParams::default()
+    };
+    let s = Spectrum::new(&p);
+    let (lo, hi) = (PI / p.layers[0].size_m, crate::ocean::nyquist(&p.layers[3]));
+    let swell = s.part_variance(Part::Swell(0), lo, hi, |_| 1.0);
+    assert!((swell - 0.25).abs() < 1e-9, "{swell}");
+    // the whole sea is the wind sea plus the swell, over the plane as over omega
+    let wind = s.part_variance(Part::Wind, lo, hi, |_| 1.0);
+    let total = s.band_variance(lo, hi);
+    assert!((total - wind - swell).abs() < 1e-12 * total);
+    let polar = polar_integral(&s, lo, hi);
+    assert!((polar / total - 1.0).abs() < 2e-3, "{polar} vs {total}");
+    // its energy travels towards 120 degrees, not back
+    let kp = s.swells[0].omega_p.powi(2) / G;
+    let at = |deg: f64| {
+        let a = deg.to_radians();
+        s.p_k(kp * a.cos(), kp * a.sin())
+    };
+    assert!(at(120.0) > 1e3 * at(300.0) && at(120.0) > at(100.0));
+    assert!((at(100.0) / at(140.0) - 1.0).abs() < 1e-9);
+    // with a wind-sea target the swell's level stands to the wind sea's as the targets do
+    let q = OceanParams {
+        hs_m: Some(1.0),
+        rms_m: None,
+        ..p.clone()
+    };
+    let s = Spectrum::new(&q);
+    let ratio = s.part_variance(Part::Swell(0), lo, hi, |_| 1.0)
+        / s.part_variance(Part::Wind, lo, hi, |_| 1.0);
+    assert!((ratio - 4.0).abs() < 1e-9, "{ratio}");
+}
+
+#[test]
+fn a_peak_period_moves_the_wind_seas_peak_and_drops_the_fetch_note() {
+    let p = OceanParams {
+        tp_s: Some(8.0),
+        ..OceanParams::default()
+    };
+    let s = Spectrum::new(&p);
+    assert!((s.omega_p - TAU / 8.0).abs() < 1e-15);
+    assert!(s.dimensionless_fetch().is_none());
+    assert!(
+        Spectrum::new(&OceanParams::default())
+            .dimensionless_fetch()
+            .is_some()
+    );
 }

@@ -21,7 +21,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::layer::{FIELD_COUNT, Layer, SLOPES, Slopes, Texel, add_texel, field, slopes};
-use super::spectrum::Spectrum;
+use super::spectrum::{Part, Spectrum};
 use super::{Interp, MAX_LAYERS, OceanError, OceanParams, SpectrumKind, SpreadingKind};
 
 /// Side of the jittered grid that estimates the folded fraction and RMS of the summed surface
@@ -228,6 +228,21 @@ pub struct LayerSummary {
     pub folded_fraction: f64,
 }
 
+/// One partition of the sea state (the wind sea or a swell) as the layers carry it.
+#[derive(Clone, Debug, Serialize)]
+pub struct PartitionSummary {
+    /// "wind sea", "swell 1", ...
+    pub name: String,
+    /// 4 x the RMS height of its share of the (scaled) spectrum over the layers' wavenumbers, m.
+    pub hs_m: f64,
+    /// Its share of that variance, 0-1.
+    pub variance_share: f64,
+    pub peak_period_s: f64,
+    pub peak_wavelength_m: f64,
+    /// Direction its waves travel towards, degrees from +x towards +z.
+    pub direction_deg: f64,
+}
+
 /// What was generated, for the JSON sidecar.
 #[derive(Clone, Debug, Serialize)]
 pub struct OceanSummary {
@@ -263,6 +278,8 @@ pub struct OceanSummary {
     /// Wall-clock generation time, s.
     pub seconds: f64,
     pub layers: Vec<LayerSummary>,
+    /// The wind sea and each swell.
+    pub partitions: Vec<PartitionSummary>,
 }
 
 fn layer_seed(seed: u64, i: usize) -> u64 {
@@ -527,8 +544,48 @@ impl Surface {
             amplitude_scale: self.amplitude_scale,
             folded_fraction: self.stats.folded_fraction,
             seconds: self.seconds,
+            partitions: self.partitions(&layers),
             layers,
         }
+    }
+
+    /// Each partition's expected share of the layers' variance (the wind sea first).
+    fn partitions(&self, layers: &[LayerSummary]) -> Vec<PartitionSummary> {
+        let Some(s) = self.spectrum.as_ref() else {
+            return Vec::new();
+        };
+        let k_lo = layers.iter().map(|l| l.k_min).fold(f64::INFINITY, f64::min);
+        let k_hi = layers.iter().map(|l| l.k_max).fold(0.0, f64::max);
+        let parts = std::iter::once(Part::Wind).chain((0..s.swells.len()).map(Part::Swell));
+        let var: Vec<(Part, f64)> = parts
+            .map(|p| {
+                (
+                    p,
+                    s.part_variance(p, k_lo, k_hi, |_| 1.0) * self.amplitude_scale.powi(2),
+                )
+            })
+            .collect();
+        let total: f64 = var.iter().map(|v| v.1).sum();
+        var.into_iter()
+            .map(|(part, v)| {
+                let (name, omega_p, dir) = match part {
+                    Part::Wind => ("wind sea".to_string(), s.omega_p, s.wind_dir_rad),
+                    Part::Swell(i) => {
+                        let w = &s.swells[i];
+                        (format!("swell {}", i + 1), w.omega_p, w.dir_rad)
+                    }
+                };
+                PartitionSummary {
+                    name,
+                    hs_m: 4.0 * v.sqrt(),
+                    variance_share: if total > 0.0 { v / total } else { 0.0 },
+                    peak_period_s: std::f64::consts::TAU / omega_p,
+                    peak_wavelength_m: std::f64::consts::TAU
+                        / crate::ocean::spectrum::wavenumber(omega_p, s.depth_m),
+                    direction_deg: dir.to_degrees(),
+                }
+            })
+            .collect()
     }
 }
 

@@ -443,3 +443,39 @@ fn mean_square_slope_of_the_spectrum_the_grid_and_the_lookup() {
     // The grid does not depend on how it is read.
     assert_eq!(bilinear.mss_grid, bicubic.mss_grid);
 }
+
+#[test]
+fn a_preset_with_a_crossing_swell_reaches_its_height_in_its_proportions() {
+    let mut p = OceanParams {
+        beaufort: Some(3),
+        swell: vec![crate::ocean::SwellParams::new(0.5, 9.0, 90.0)],
+        ..small(1).params().clone()
+    };
+    p.apply_preset();
+    let target = p.rms_target().unwrap();
+    // WMO's 0.6 m for force 3 and the crossing swell's 0.5 m, summed in variance
+    assert!((4.0 * target - (0.36f64 + 0.25).sqrt()).abs() < 1e-12);
+    let mut shares = [0.0; 3];
+    for seed in 0..4 {
+        let s = Surface::new(&p, seed).unwrap();
+        let sum = s.summary();
+        assert!((sum.hs_m / (4.0 * target) - 1.0).abs() < 1e-4, "{sum:?}");
+        assert_eq!(sum.hs_target_m, Some(4.0 * target));
+        let names: Vec<&str> = sum.partitions.iter().map(|q| q.name.as_str()).collect();
+        assert_eq!(names, ["wind sea", "swell 1", "swell 2"]);
+        for (share, q) in shares.iter_mut().zip(&sum.partitions) {
+            *share += q.variance_share / 4.0;
+        }
+        let crossing = &sum.partitions[2];
+        assert!(
+            (crossing.direction_deg - 90.0).abs() < 1e-9
+                && (crossing.peak_period_s - 9.0).abs() < 1e-9
+        );
+    }
+    // the shares (of the scaled spectrum over the layers) are the asked variances' (wind sea
+    // 0.412 m, background swell 0.436 m, crossing swell 0.5 m) up to the layers' coverage
+    let asked = [0.412f64, 0.436, 0.5].map(|h| h * h / 0.61);
+    for (got, want) in shares.iter().zip(asked) {
+        assert!((got - want).abs() < 0.02, "{shares:?} vs {asked:?}");
+    }
+}

@@ -97,14 +97,30 @@ pub struct OceanParams {
     pub fetch_km: f64,
     /// Water depth, m (finite-depth dispersion everywhere; TMA attenuation for `Tma`).
     pub depth_m: f64,
-    /// Target RMS height, m: the realization (at `time_s`) is scaled to exactly this.
+    /// Target RMS height of the wind sea, m: the realization (at `time_s`) is scaled to exactly
+    /// this, or, with swells, to exactly the RMS of all partitions together,
+    /// sqrt(rms^2 + sum of (Hs_swell / 4)^2), with the partitions in their asked proportions.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rms_m: Option<f64>,
-    /// Target significant wave height Hs, m, the other way to give the same target: Hs is the
-    /// spectral Hm0 = 4 x RMS height, so the realization is scaled to an RMS of exactly Hs / 4.
+    /// Target significant wave height Hs of the wind sea, m, the other way to give the same
+    /// target: Hs is the spectral Hm0 = 4 x RMS height, so it stands for an RMS of Hs / 4.
     /// At most one of `rms_m` and `hs_m`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub hs_m: Option<f64>,
+    /// Peak period of the wind sea, s (TMA, JONSWAP): replaces the fetch law's peak, with a
+    /// height target (`hs_m` or `rms_m`) for its level; the wind still sets the spreading.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tp_s: Option<f64>,
+    /// A Beaufort force (1-12) that sets the wind, the fetch, the height and, for light winds,
+    /// a background swell (see [`sea_state`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub beaufort: Option<u8>,
+    /// A Douglas sea state (1-9), as `beaufort` (see [`sea_state`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub douglas: Option<u8>,
+    /// Swell partitions added to the wind sea.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub swell: Vec<SwellParams>,
     /// Direction the wind blows towards, degrees from +x towards +z.
     pub wind_dir_deg: f64,
     /// JONSWAP peak enhancement (TMA, JONSWAP).
@@ -128,10 +144,18 @@ pub struct OceanParams {
 }
 
 impl OceanParams {
-    /// The RMS height the realization is scaled to: `rms_m`, or `hs_m` / 4; none without a
-    /// target.
-    pub fn rms_target(&self) -> Option<f64> {
+    /// The wind sea's RMS height target: `rms_m`, or `hs_m` / 4; none without a target.
+    pub fn wind_rms_target(&self) -> Option<f64> {
         self.rms_m.or(self.hs_m.map(|hs| hs / 4.0))
+    }
+
+    /// The RMS height the realization is scaled to: the wind sea's target and every swell's
+    /// Hs / 4 summed in variance; none without a wind-sea target.
+    pub fn rms_target(&self) -> Option<f64> {
+        self.wind_rms_target().map(|w| {
+            let swell: f64 = self.swell.iter().map(|s| (s.hs_m / 4.0).powi(2)).sum();
+            (w * w + swell).sqrt()
+        })
     }
 }
 
@@ -143,6 +167,10 @@ impl Default for OceanParams {
             depth_m: 997.9,
             rms_m: Some(0.225),
             hs_m: None,
+            tp_s: None,
+            beaufort: None,
+            douglas: None,
+            swell: Vec::new(),
             wind_dir_deg: 0.0,
             gamma: 3.3,
             choppiness: 1.0,
@@ -296,6 +324,36 @@ impl OceanParams {
                 ));
             }
         }
+        if let Some(tp) = self.tp_s {
+            if !(tp.is_finite() && tp > 0.5 && tp <= 30.0) {
+                return Err(invalid("ocean.tp_s", "in (0.5, 30] s", tp));
+            }
+            if !matches!(self.spectrum, SpectrumKind::Tma | SpectrumKind::Jonswap) {
+                return Err(invalid(
+                    "ocean.tp_s",
+                    "set only with spectrum = \"tma\" or \"jonswap\" (the others tie the peak to the wind)",
+                    format!("{tp} with spectrum = \"{}\"", self.spectrum),
+                ));
+            }
+            if self.rms_target().is_none() {
+                return Err(invalid(
+                    "ocean.tp_s",
+                    "given with a height target, ocean.hs_m or ocean.rms_m (a peak period alone does not say how high the sea is)",
+                    tp,
+                ));
+            }
+        }
+        if self.swell.len() > sea_state::MAX_SWELLS {
+            return Err(invalid(
+                "ocean.swell",
+                &format!("at most {} partitions", sea_state::MAX_SWELLS),
+                self.swell.len(),
+            ));
+        }
+        for (i, s) in self.swell.iter().enumerate() {
+            s.validate(i)?;
+        }
+        self.validate_preset()?;
         finite("wind_dir_deg", self.wind_dir_deg)?;
         if !self.gamma.is_finite() || self.gamma < 1.0 {
             return Err(invalid("ocean.gamma", "finite and >= 1", self.gamma));
@@ -442,8 +500,10 @@ impl OceanParams {
 }
 
 mod partition;
+pub mod sea_state;
 use partition::overlap_bump;
 pub use partition::{Bump, Partition, band_edge, nyquist};
+pub use sea_state::{Preset, SwellParams};
 
 #[cfg(test)]
 mod tests;

@@ -150,3 +150,146 @@ fn serde_round_trip_and_unknown_keys() {
         .to_string();
     assert!(bad.contains("extra"), "{bad}");
 }
+
+#[test]
+fn every_preset_resolves_to_its_published_wind_and_height() {
+    for n in 1..=12u8 {
+        let mut p = OceanParams {
+            beaufort: Some(n),
+            ..OceanParams::default()
+        };
+        p.apply_preset();
+        p.validate().unwrap();
+        let row = Preset::Beaufort(n).row().unwrap();
+        let (lo, hi) = row.wind_range_m_s.unwrap();
+        assert!(
+            (lo..=hi).contains(&p.wind_speed),
+            "force {n}: {}",
+            p.wind_speed
+        );
+        // the wind sea and the background swell hold the table's height together
+        let total = p.rms_target().unwrap() * 4.0;
+        assert!(
+            (total - row.hs_m).abs() < 1e-12 * row.hs_m,
+            "force {n}: {total}"
+        );
+        // a wind sea never steeper than full development allows
+        let wind_hs = p.hs_m.unwrap();
+        assert!(wind_hs <= sea_state::fully_developed_hs(p.wind_speed) * (1.0 + 1e-12));
+        // the light winds need the swell, the strong ones are fetch-limited wind seas
+        assert_eq!(!p.swell.is_empty(), n <= 5, "force {n}: {:?}", p.swell);
+        assert!(
+            p.fetch_km
+                <= sea_state::FULLY_DEVELOPED_FETCH * p.wind_speed.powi(2) / 9810.0 * (1.0 + 1e-12)
+        );
+        // applying twice changes nothing
+        let again = {
+            let mut q = p.clone();
+            q.apply_preset();
+            q
+        };
+        assert_eq!(again, p);
+    }
+    for n in 1..=9u8 {
+        let mut p = OceanParams {
+            douglas: Some(n),
+            ..OceanParams::default()
+        };
+        p.apply_preset();
+        p.validate().unwrap();
+        let row = Preset::Douglas(n).row().unwrap();
+        let (lo, hi) = row.height_range_m;
+        let hs = p.hs_m.unwrap();
+        assert!(hs >= lo && hs <= hi.max(lo), "state {n}: {hs}");
+        assert!(p.swell.is_empty(), "state {n}");
+        // a fully developed sea of that height
+        assert!((sea_state::fully_developed_hs(p.wind_speed) - hs).abs() < 1e-9 * hs);
+    }
+}
+
+#[test]
+fn a_preset_and_the_keys_it_sets_are_refused_together() {
+    let preset = |f: &dyn Fn(&mut OceanParams)| {
+        let mut p = OceanParams {
+            beaufort: Some(3),
+            ..OceanParams::default()
+        };
+        p.apply_preset();
+        f(&mut p);
+        p.validate().map_err(|e| e.to_string())
+    };
+    assert!(preset(&|_| {}).is_ok());
+    let e = preset(&|p| p.wind_speed = 7.0).unwrap_err();
+    assert!(
+        e.starts_with("ocean.wind_speed must be left to ocean.beaufort = 3"),
+        "{e}"
+    );
+    let e = preset(&|p| p.rms_m = Some(0.1)).unwrap_err();
+    assert!(
+        e.starts_with("ocean.hs_m") || e.starts_with("ocean.rms_m"),
+        "{e}"
+    );
+    let e = preset(&|p| p.douglas = Some(2)).unwrap_err();
+    assert!(
+        e.starts_with("ocean.douglas must be given without ocean.beaufort"),
+        "{e}"
+    );
+    let e = preset(&|p| {
+        p.swell.remove(0);
+    })
+    .unwrap_err();
+    assert!(e.starts_with("ocean.swell[0]"), "{e}");
+    // the scene's own swells go after the background swell, and clearing keeps them
+    let mut p = OceanParams {
+        beaufort: Some(2),
+        swell: vec![SwellParams::new(1.0, 12.0, 90.0)],
+        ..OceanParams::default()
+    };
+    p.apply_preset();
+    p.validate().unwrap();
+    assert_eq!(p.swell.len(), 2);
+    p.clear_preset();
+    assert_eq!(p.swell, vec![SwellParams::new(1.0, 12.0, 90.0)]);
+    assert!(
+        err_of(|p| p.beaufort = Some(13))
+            .starts_with("ocean.beaufort must be a Beaufort force in 1..=12")
+    );
+    assert!(
+        err_of(|p| p.douglas = Some(0)).starts_with("ocean.douglas must be a Douglas sea state")
+    );
+}
+
+#[test]
+fn a_peak_period_needs_a_height_and_a_swell_its_ranges() {
+    assert!(err_of(|p| (p.tp_s, p.rms_m) = (Some(8.0), None)).contains("with a height target"));
+    assert!(err_of(|p| p.tp_s = Some(0.1)).starts_with("ocean.tp_s must be in (0.5, 30]"));
+    assert!(
+        err_of(|p| (p.tp_s, p.spectrum) = (Some(8.0), SpectrumKind::PiersonMoskowitz))
+            .contains("tma")
+    );
+    let swell = |f: &dyn Fn(&mut SwellParams)| {
+        err_of(|p| {
+            let mut s = SwellParams::new(1.0, 10.0, 0.0);
+            f(&mut s);
+            p.swell = vec![s];
+        })
+    };
+    assert!(swell(&|s| s.hs_m = 0.0).starts_with("ocean.swell[0].hs_m must be in (0, 25]"));
+    assert!(swell(&|s| s.tp_s = f64::NAN).starts_with("ocean.swell[0].tp_s"));
+    assert!(swell(&|s| s.dir_deg = f64::INFINITY).starts_with("ocean.swell[0].dir_deg"));
+    assert!(swell(&|s| s.spreading_s = -1.0).starts_with("ocean.swell[0].spreading_s"));
+    assert!(swell(&|s| s.gamma = 0.5).starts_with("ocean.swell[0].gamma"));
+    assert!(
+        err_of(|p| p.swell = vec![SwellParams::new(1.0, 10.0, 0.0); 5])
+            .starts_with("ocean.swell must be at most 4")
+    );
+    // the target of a sea with swells is the partitions' variances summed
+    let p = OceanParams {
+        rms_m: None,
+        hs_m: Some(3.0),
+        swell: vec![SwellParams::new(4.0, 12.0, 0.0)],
+        ..OceanParams::default()
+    };
+    assert!((p.rms_target().unwrap() - 5.0 / 4.0).abs() < 1e-15);
+    assert_eq!(p.wind_rms_target(), Some(0.75));
+}
