@@ -677,3 +677,54 @@ fn the_docs_preset_tables_are_the_codes() {
         assert_eq!(r[4], format!("{:.2}", row.wind_m_s), "state {n}");
     }
 }
+
+#[test]
+fn a_repeating_sea_is_noted_and_auto_layers_follow_its_peak() {
+    // 3 m/s over 15 km: a 7.7 m peak that the default layers tile outright
+    let sea = [
+        "ocean", "--wind", "3", "--fetch", "15", "--depth", "40", "--json",
+    ];
+    let (code, out, err) = vastocean(&sea);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("note: the sea repeats itself") && err.contains("--layers auto"),
+        "{err}"
+    );
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(
+        j["repeat_correlation"]["max"].as_f64().unwrap() > 0.9,
+        "{out}"
+    );
+    let (code, out, err) = vastocean(&[&sea[..], &["--layers", "auto"]].concat());
+    assert_eq!(code, 0, "{err}");
+    let j: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(j["layers"].as_array().unwrap().len(), 8, "{out}");
+    let r = j["repeat_correlation"]["max"].as_f64().unwrap();
+    assert!(r < 0.6, "{r}");
+    // and auto in a scene file: the dump writes the chosen list
+    let dir = tmp("auto");
+    let file = dir.join("a.toml");
+    std::fs::write(
+        &file,
+        "[ocean]\nwind_speed = 3.0\nfetch_km = 15.0\nlayers = \"auto\"\n",
+    )
+    .unwrap();
+    let (code, out, err) = vastocean(&[
+        "render",
+        "--config",
+        file.to_str().unwrap(),
+        "--dump-config",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(out.matches("[[ocean.layers]]").count(), 8, "{out}");
+    std::fs::write(&file, "[ocean]\nlayers = \"many\"\n").unwrap();
+    let (code, _, err) = vastocean(&[
+        "render",
+        "--config",
+        file.to_str().unwrap(),
+        "--dump-config",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("\"auto\" or an array"), "{err}");
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -40,9 +40,28 @@ pub struct OceanReport {
 
 impl super::Remarks for OceanReport {
     fn notes(&self) -> Vec<String> {
-        super::sea_state_note(&self.range_notes)
+        let mut notes: Vec<String> = super::sea_state_note(&self.range_notes)
             .into_iter()
-            .collect()
+            .collect();
+        let r = &self.repeat_correlation;
+        if r.max > REPEAT_NOTE {
+            let lag = if r.along_wind.correlation >= r.across_wind.correlation {
+                r.along_wind.lag_m
+            } else {
+                r.across_wind.lag_m
+            };
+            let peak = self.params.shortest_peak_wavelength();
+            let advice = if self.params.layers_auto {
+                "its peak is too short for periodic layers to hide (docs/ocean.md, \"How much the sea repeats\")".to_string()
+            } else {
+                format!("--layers auto chooses layers for its {peak:.1} m peak")
+            };
+            notes.push(format!(
+                "the sea repeats itself (correlation {:.2} at a lag of {lag:.0} m); {advice}",
+                r.max
+            ));
+        }
+        notes
     }
     fn warnings(&self) -> Vec<String> {
         let mut w = Vec::new();
@@ -55,6 +74,10 @@ impl super::Remarks for OceanReport {
         w
     }
 }
+
+/// A repeat correlation above this is noted (a layer that holds this share of the variance
+/// repeats visibly).
+pub const REPEAT_NOTE: f64 = 0.2;
 
 pub fn run(job: &OceanJob) -> Result<OceanReport, AppError> {
     job.params.validate()?;

@@ -43,7 +43,8 @@ pub struct OceanArgs {
     /// Direction the wind blows towards, degrees from +x towards +z.
     #[arg(long, default_value_t = OceanParams::default().wind_dir_deg)]
     wind_dir: f64,
-    /// Layers as SIZE_M:N pairs, coarsest first, e.g. 400:512,47.3:512,5.83:256.
+    /// Layers as SIZE_M:N pairs, coarsest first, e.g. 400:512,47.3:512,5.83:256, or `auto` to
+    /// choose them from the sea's peak wavelength (docs/ocean.md).
     #[arg(long, value_parser = parse_layers, allow_hyphen_values = true)]
     layers: Option<Layers>,
     /// How the layers share the wavenumbers: overlap (each band in several layers, so the sum
@@ -127,6 +128,9 @@ fn parse_profile(s: &str) -> Result<([f64; 2], [f64; 2], usize), String> {
 }
 
 fn parse_layers(s: &str) -> Result<Layers, String> {
+    if s.trim() == "auto" {
+        return Ok(Layers(Vec::new()));
+    }
     let layer = |pair: &str| {
         let (size, n) = pair
             .split_once(':')
@@ -171,6 +175,7 @@ impl OceanArgs {
             ..defaults
         };
         params.apply_preset();
+        params.resolve_layers();
         app::ocean::OceanJob {
             params,
             seed: self.seed,

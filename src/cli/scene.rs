@@ -153,6 +153,8 @@ impl SceneFlags {
             (s.ocean.beaufort, s.ocean.douglas) = preset;
             s.ocean.apply_preset();
         }
+        // layers asked as "auto" follow the sea the flags made
+        s.ocean.resolve_layers();
         s.ocean.layering = self.layering.unwrap_or(s.ocean.layering);
         s.ocean.spreading_cap = self.spreading_cap.or(s.ocean.spreading_cap);
         s.sky.file = self.sky.clone().or(s.sky.file);

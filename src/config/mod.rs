@@ -217,6 +217,7 @@ impl SceneConfig {
             }
             cfg.ocean.apply_preset();
         }
+        cfg.ocean.resolve_layers();
         // A file's relative paths are relative to the file; stdin's to the working directory.
         if let (Some(f), Some(dir), false) = (&cfg.sky.file, path.parent(), from_stdin)
             && f.is_relative()

@@ -134,8 +134,13 @@ pub struct OceanParams {
     /// values: 10 for wind waves, 25 and 75 for short- and long-travelled swell.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spreading_cap: Option<f64>,
-    /// Coarsest first.
+    /// Coarsest first. In a file, `layers = "auto"` chooses them from the sea's peak
+    /// ([`OceanParams::resolve_layers`]).
+    #[serde(deserialize_with = "layers_or_auto")]
     pub layers: Vec<LayerSpec>,
+    /// Whether `layers` was asked as "auto" (chosen again if the sea changes).
+    #[serde(skip)]
+    pub layers_auto: bool,
     /// How the layers share the wavenumbers.
     pub layering: Layering,
     /// Time t of eq. 2, s.
@@ -200,11 +205,36 @@ impl Default for OceanParams {
                     n: 256,
                 },
             ],
+            layers_auto: false,
             layering: Layering::Overlap,
             time_s: 0.0,
             interp: Interp::Bilinear,
         }
     }
+}
+
+/// `layers` as a list of tables, or the text "auto" (read as no layers: the loaders choose them).
+/// A visitor, not an untagged enum, so that a bad table's own error (an unknown key) comes
+/// through.
+fn layers_or_auto<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<LayerSpec>, D::Error> {
+    struct V;
+    impl<'de> serde::de::Visitor<'de> for V {
+        type Value = Vec<LayerSpec>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("\"auto\" or an array of { size_m, n } tables")
+        }
+        fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Self::Value, E> {
+            if v == "auto" {
+                Ok(Vec::new())
+            } else {
+                Err(E::invalid_value(serde::de::Unexpected::Str(v), &self))
+            }
+        }
+        fn visit_seq<A: serde::de::SeqAccess<'de>>(self, seq: A) -> Result<Self::Value, A::Error> {
+            Deserialize::deserialize(serde::de::value::SeqAccessDeserializer::new(seq))
+        }
+    }
+    d.deserialize_any(V)
 }
 
 fn positive(field: &str, v: f64) -> Result<(), ConfigError> {
@@ -379,7 +409,9 @@ impl OceanParams {
         if self.layers.is_empty() || self.layers.len() > MAX_LAYERS {
             return Err(invalid(
                 "ocean.layers",
-                &format!("a list of 1 to {MAX_LAYERS} layers"),
+                &format!(
+                    "a list of 1 to {MAX_LAYERS} layers (\"auto\" is chosen by OceanParams::resolve_layers)"
+                ),
                 format!("{} layers", self.layers.len()),
             ));
         }
@@ -499,6 +531,7 @@ impl OceanParams {
     }
 }
 
+pub mod auto;
 mod partition;
 pub mod sea_state;
 use partition::overlap_bump;

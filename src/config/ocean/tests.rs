@@ -293,3 +293,58 @@ fn a_peak_period_needs_a_height_and_a_swell_its_ranges() {
     assert!((p.rms_target().unwrap() - 5.0 / 4.0).abs() < 1e-15);
     assert_eq!(p.wind_rms_target(), Some(0.75));
 }
+
+#[test]
+fn auto_layers_follow_the_peak_and_are_valid_for_every_peak() {
+    // the default sea (a 54 m peak) gets exactly the default layers
+    let mut p = OceanParams {
+        layers: Vec::new(),
+        ..OceanParams::default()
+    };
+    p.resolve_layers();
+    assert!(p.layers_auto);
+    assert_eq!(p.layers, OceanParams::default().layers);
+    // every peak from 0.3 m to 300 m gets layers that validate, in three tiers
+    let mut tiers = std::collections::BTreeSet::new();
+    for i in 0..=60 {
+        let tp = 0.55 * 1.1f64.powi(i);
+        let mut p = OceanParams {
+            tp_s: Some(tp.min(30.0)),
+            layers_auto: true,
+            ..OceanParams::default()
+        };
+        p.resolve_layers();
+        p.validate()
+            .unwrap_or_else(|e| panic!("peak {} m: {e}", p.shortest_peak_wavelength()));
+        let peak = p.shortest_peak_wavelength();
+        let top = p.layers[2].size_m;
+        tiers.insert(p.layers.len());
+        if (auto::MIN_MID_PEAK_M..auto::SHORT_PEAK_M).contains(&peak) {
+            // five mid layers of 24-34 peaks, texels of 1/30 of it
+            assert_eq!(p.layers.len(), 8, "{peak}");
+            assert!(top / peak > 33.0 && p.layers[6].size_m / peak > 24.0);
+        } else if (auto::SHORT_PEAK_M..auto::LONG_PEAK_M).contains(&peak) {
+            assert_eq!((p.layers[0].n, top), (4096, 20.9), "{peak}");
+        } else {
+            assert_eq!(p.layers, OceanParams::default().layers, "{peak}");
+        }
+    }
+    assert_eq!(tiers.len(), 2, "{tiers:?}"); // 8 layers, or 4 (two kinds)
+    // explicit layers are kept; a preset leaves them be unless they are the default list
+    let mut p = OceanParams::tiling_layers();
+    p.resolve_layers();
+    assert_eq!(p.layers, OceanParams::tiling_layers().layers);
+    let mut p = OceanParams {
+        beaufort: Some(3),
+        ..OceanParams::tiling_layers()
+    };
+    p.apply_preset();
+    assert!(!p.layers_auto);
+    let mut p = OceanParams {
+        beaufort: Some(3),
+        ..OceanParams::default()
+    };
+    p.apply_preset();
+    p.resolve_layers();
+    assert_eq!(p.layers[0].n, 4096, "Beaufort 3's 17 m peak");
+}
