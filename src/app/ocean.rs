@@ -52,7 +52,9 @@ impl super::Remarks for OceanReport {
             };
             let peak = self.params.shortest_peak_wavelength();
             let advice = if self.params.layers_auto {
-                "its peak is too short for periodic layers to hide (docs/ocean.md, \"How much the sea repeats\")".to_string()
+                format!(
+                    "its {peak:.1} m peak is too short for the layers auto chooses to hide their periods (docs/ocean.md, \"How much the sea repeats\")"
+                )
             } else {
                 format!("--layers auto chooses layers for its {peak:.1} m peak")
             };
@@ -95,7 +97,12 @@ pub fn run(job: &OceanJob) -> Result<OceanReport, AppError> {
     let surface = Surface::new(&job.params, job.seed)?;
     let summary = surface.summary().clone();
     let sampler = surface.sampler([0.0, 0.0]);
-    let repeat_correlation = repeat_correlation(&sampler, job.params.wind_dir_deg);
+    let longest_peak = summary
+        .partitions
+        .iter()
+        .map(|q| q.peak_wavelength_m)
+        .fold(0.0, f64::max);
+    let repeat_correlation = repeat_correlation(&sampler, job.params.wind_dir_deg, longest_peak);
     let range_notes = surface
         .spectrum()
         .map_or_else(Vec::new, |s| s.range_notes());
@@ -192,12 +199,13 @@ impl fmt::Display for OceanReport {
         let r = &self.repeat_correlation;
         writeln!(
             f,
-            "  repeat correlation {:.3} (along the wind {:.3} at {:.0} m, across {:.3} at {:.0} m)",
+            "  repeat correlation {:.3} (along the wind {:.3} at {:.0} m, across {:.3} at {:.0} m; lags from {:.0} m)",
             r.max,
             r.along_wind.correlation,
             r.along_wind.lag_m,
             r.across_wind.correlation,
-            r.across_wind.lag_m
+            r.across_wind.lag_m,
+            r.min_lag_m
         )?;
         write!(f, "  generated in      {:.3} s", s.seconds)?;
         if let Some(png) = &self.png {

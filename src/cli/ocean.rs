@@ -175,6 +175,8 @@ impl OceanArgs {
             ..defaults
         };
         params.apply_preset();
+        // a preset's sea chooses its layers unless --layers names them
+        params.layers_auto |= params.preset().is_some() && self.layers.is_none();
         params.resolve_layers();
         app::ocean::OceanJob {
             params,

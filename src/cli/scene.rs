@@ -146,6 +146,9 @@ impl SceneFlags {
             if self.beaufort.is_some() || self.douglas.is_some() {
                 preset = (self.beaufort, self.douglas);
                 (s.ocean.rms_m, s.ocean.hs_m, s.ocean.tp_s) = (None, None, None);
+                // the preset's sea chooses its layers unless the file names its own
+                s.ocean.layers_auto |=
+                    s.ocean.layers == vastocean::config::OceanParams::default().layers;
             }
             if !self.swell.is_empty() {
                 s.ocean.swell = self.swell.clone();

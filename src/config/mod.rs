@@ -216,6 +216,10 @@ impl SceneConfig {
                 ));
             }
             cfg.ocean.apply_preset();
+            // a preset's sea chooses its layers unless the file names them
+            if !given.is_some_and(|o| o.contains_key("layers")) {
+                cfg.ocean.layers_auto = true;
+            }
         }
         cfg.ocean.resolve_layers();
         // A file's relative paths are relative to the file; stdin's to the working directory.

@@ -353,8 +353,9 @@ impl Spectrum {
     /// are near 10). The surface is still valid there: the models extrapolate.
     pub fn range_notes(&self) -> Vec<String> {
         let mut w = Vec::new();
+        // (a preset's fully developed sea sits at the bound itself, give or take rounding)
         if let Some(f) = self.dimensionless_fetch()
-            && f > FULLY_DEVELOPED_FETCH
+            && f > FULLY_DEVELOPED_FETCH * (1.0 + 1e-9)
         {
             w.push(format!(
                 "the fetch is past full development (g F / U^2 = {f:.3e} > {FULLY_DEVELOPED_FETCH:.3e}), so JONSWAP's fetch law puts the peak at omega_p U / g = {:.2}, below the fully developed 0.855",

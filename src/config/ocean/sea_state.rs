@@ -259,8 +259,8 @@ impl OceanParams {
 
     /// Writes the preset's sea into the explicit keys: wind speed, fetch, the wind sea's Hs
     /// target (no RMS target, no peak period) and, for light winds, the background swell as the
-    /// first swell (travelling with the wind), before any swells of the scene's own. Layers left
-    /// at the default list become "auto" ([`OceanParams::resolve_layers`]). Idempotent;
+    /// first swell (travelling with the wind), before any swells of the scene's own. (The loaders make
+    /// a preset's layers "auto" when the scene names none.) Idempotent;
     /// nothing happens without a preset or with an unknown one (validation names it).
     pub fn apply_preset(&mut self) {
         let Some((u, fetch_km, hs, swell)) = self.preset().and_then(Preset::sea) else {
@@ -269,10 +269,6 @@ impl OceanParams {
         self.wind_speed = u;
         self.fetch_km = fetch_km;
         self.hs_m = Some(hs);
-        // a preset's sea chooses its layers unless the scene names others
-        if self.layers == OceanParams::default().layers {
-            self.layers_auto = true;
-        }
         self.rms_m = None;
         self.tp_s = None;
         if let Some(mut s) = swell {

@@ -330,18 +330,13 @@ fn auto_layers_follow_the_peak_and_are_valid_for_every_peak() {
         }
     }
     assert_eq!(tiers.len(), 2, "{tiers:?}"); // 8 layers, or 4 (two kinds)
-    // explicit layers are kept; a preset leaves them be unless they are the default list
+    // explicit layers are kept
     let mut p = OceanParams::tiling_layers();
     p.resolve_layers();
     assert_eq!(p.layers, OceanParams::tiling_layers().layers);
     let mut p = OceanParams {
         beaufort: Some(3),
-        ..OceanParams::tiling_layers()
-    };
-    p.apply_preset();
-    assert!(!p.layers_auto);
-    let mut p = OceanParams {
-        beaufort: Some(3),
+        layers_auto: true,
         ..OceanParams::default()
     };
     p.apply_preset();
