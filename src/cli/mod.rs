@@ -243,3 +243,19 @@ pub fn parse_swell(s: &str) -> Result<vastocean::ocean::SwellParams, String> {
     }
     Ok(swell)
 }
+
+/// The sea-state flags of `ocean`, `render` and `compare`: a preset and swells.
+#[derive(clap::Args)]
+pub struct SeaFlags {
+    /// A Beaufort force 1-12: sets the wind, fetch and height (docs/ocean.md, "Sea states").
+    #[arg(long, conflicts_with_all = ["wind", "fetch", "rms", "hs", "tp", "douglas"])]
+    pub beaufort: Option<u8>,
+    /// A Douglas sea state 1-9: sets the wind, fetch and height (docs/ocean.md, "Sea states").
+    #[arg(long, conflicts_with_all = ["wind", "fetch", "rms", "hs", "tp"])]
+    pub douglas: Option<u8>,
+    /// A swell HS:TP[:DIR[:S]] (m, s, degrees it travels towards, cos-2s exponent; default 0
+    /// and 25) added to the wind sea (in render and compare replacing the scene's own); repeat
+    /// for more.
+    #[arg(long, value_parser = parse_swell, allow_hyphen_values = true)]
+    pub swell: Vec<vastocean::ocean::SwellParams>,
+}

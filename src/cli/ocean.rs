@@ -30,16 +30,8 @@ pub struct OceanArgs {
     /// JONSWAP peak enhancement gamma of the wind sea.
     #[arg(long, default_value_t = OceanParams::default().gamma)]
     gamma: f64,
-    /// A Beaufort force 1-12: sets the wind, fetch and height (docs/ocean.md, "Sea states").
-    #[arg(long, conflicts_with_all = ["wind", "fetch", "rms", "hs", "tp", "douglas"])]
-    beaufort: Option<u8>,
-    /// A Douglas sea state 1-9: sets the wind, fetch and height (docs/ocean.md, "Sea states").
-    #[arg(long, conflicts_with_all = ["wind", "fetch", "rms", "hs", "tp"])]
-    douglas: Option<u8>,
-    /// A swell HS:TP[:DIR[:S]] (m, s, degrees it travels towards, cos-2s exponent; default 0
-    /// and 25) added to the wind sea; repeat for more.
-    #[arg(long, value_parser = super::parse_swell, allow_hyphen_values = true)]
-    swell: Vec<vastocean::ocean::SwellParams>,
+    #[command(flatten)]
+    sea: super::SeaFlags,
     /// Direction the wind blows towards, degrees from +x towards +z.
     #[arg(long, default_value_t = OceanParams::default().wind_dir_deg)]
     wind_dir: f64,
@@ -162,9 +154,9 @@ impl OceanArgs {
             hs_m: self.hs,
             tp_s: self.tp,
             gamma: self.gamma,
-            beaufort: self.beaufort,
-            douglas: self.douglas,
-            swell: self.swell.clone(),
+            beaufort: self.sea.beaufort,
+            douglas: self.sea.douglas,
+            swell: self.sea.swell.clone(),
             wind_dir_deg: self.wind_dir,
             choppiness: self.choppiness,
             time_s: self.time,

@@ -34,16 +34,8 @@ pub struct SceneFlags {
     /// Peak period of the wind sea, s, instead of the fetch law's (with a height target).
     #[arg(long)]
     tp: Option<f64>,
-    /// A Beaufort force 1-12: sets the wind, fetch and height (docs/ocean.md, "Sea states").
-    #[arg(long, conflicts_with_all = ["wind", "fetch", "rms", "hs", "tp", "douglas"])]
-    beaufort: Option<u8>,
-    /// A Douglas sea state 1-9: sets the wind, fetch and height (docs/ocean.md, "Sea states").
-    #[arg(long, conflicts_with_all = ["wind", "fetch", "rms", "hs", "tp"])]
-    douglas: Option<u8>,
-    /// A swell HS:TP[:DIR[:S]] (m, s, degrees it travels towards, cos-2s exponent; default 0
-    /// and 25) added to the wind sea, replacing the scene's; repeat for more.
-    #[arg(long, value_parser = super::parse_swell, allow_hyphen_values = true)]
-    swell: Vec<vastocean::ocean::SwellParams>,
+    #[command(flatten)]
+    sea: super::SeaFlags,
     /// How the ocean's layers share the wavenumbers (docs/ocean.md).
     #[arg(long, value_parser = choice::<vastocean::ocean::Layering>())]
     layering: Option<vastocean::ocean::Layering>,
@@ -88,9 +80,9 @@ impl SceneFlags {
             (self.rms.is_some(), "ocean.rms_m", "--rms"),
             (self.hs.is_some(), "ocean.hs_m", "--hs"),
             (self.tp.is_some(), "ocean.tp_s", "--tp"),
-            (self.beaufort.is_some(), "ocean.beaufort", "--beaufort"),
-            (self.douglas.is_some(), "ocean.douglas", "--douglas"),
-            (!self.swell.is_empty(), "ocean.swell", "--swell"),
+            (self.sea.beaufort.is_some(), "ocean.beaufort", "--beaufort"),
+            (self.sea.douglas.is_some(), "ocean.douglas", "--douglas"),
+            (!self.sea.swell.is_empty(), "ocean.swell", "--swell"),
             (
                 self.spreading_cap.is_some(),
                 "ocean.spreading_cap",
@@ -140,18 +132,18 @@ impl SceneFlags {
         s.ocean.tp_s = self.tp.or(s.ocean.tp_s);
         // A preset flag replaces the scene's sea; swell flags replace the scene's own swells
         // (a scene preset's background swell stays first).
-        if self.beaufort.is_some() || self.douglas.is_some() || !self.swell.is_empty() {
+        if self.sea.beaufort.is_some() || self.sea.douglas.is_some() || !self.sea.swell.is_empty() {
             let mut preset = (s.ocean.beaufort, s.ocean.douglas);
             s.ocean.clear_preset();
-            if self.beaufort.is_some() || self.douglas.is_some() {
-                preset = (self.beaufort, self.douglas);
+            if self.sea.beaufort.is_some() || self.sea.douglas.is_some() {
+                preset = (self.sea.beaufort, self.sea.douglas);
                 (s.ocean.rms_m, s.ocean.hs_m, s.ocean.tp_s) = (None, None, None);
                 // the preset's sea chooses its layers unless the file names its own
                 s.ocean.layers_auto |=
                     s.ocean.layers == vastocean::config::OceanParams::default().layers;
             }
-            if !self.swell.is_empty() {
-                s.ocean.swell = self.swell.clone();
+            if !self.sea.swell.is_empty() {
+                s.ocean.swell = self.sea.swell.clone();
             }
             (s.ocean.beaufort, s.ocean.douglas) = preset;
             s.ocean.apply_preset();
