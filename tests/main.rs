@@ -12,5 +12,6 @@ mod frames;
 mod lod;
 mod passes;
 mod render;
+mod sea_state;
 mod sky;
 mod stress;
