@@ -15,6 +15,9 @@ use super::{OceanParams, SpectrumKind, SpreadingKind};
 #[path = "spectrum_swell.rs"]
 mod swell;
 pub use swell::SwellSpectrum;
+#[path = "spectrum_table.rs"]
+mod table;
+pub use table::RadialTable;
 
 /// Standard gravity, m/s^2.
 pub const G: f64 = 9.81;

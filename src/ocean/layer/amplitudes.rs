@@ -8,35 +8,70 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::{C32, signed_index};
-use crate::ocean::spectrum::Spectrum;
+use crate::ocean::spectrum::{RadialTable, Spectrum};
 
 /// Cells closer to k = 0 than this many fundamentals are integrated on at least an 8 x 8
 /// sub-grid: there P (~ k^-3 on the tail) and the overlap weights change within a cell (one
 /// midpoint under-counts a convex P by ~12 % at 2 fundamentals).
 const SUBCELL_RADIUS: f64 = 8.0;
 
+/// weight(|k|) P(k) as the cells integrate it: the spectrum's own formulas, or the radial
+/// table (the fast path; see [`RadialTable`]).
+pub(super) enum PointSpectrum<'a> {
+    Exact {
+        spectrum: &'a Spectrum,
+        weight: &'a (dyn Fn(f64) -> f64 + Sync),
+    },
+    Table(RadialTable),
+}
+
+impl<'a> PointSpectrum<'a> {
+    /// The table where the spectrum has one, else the exact formulas; `k_max` bounds the |k|
+    /// the cells of a layer read.
+    pub(super) fn new(
+        spectrum: &'a Spectrum,
+        weight: &'a (dyn Fn(f64) -> f64 + Sync),
+        k_max: f64,
+    ) -> PointSpectrum<'a> {
+        match RadialTable::new(spectrum, weight, k_max) {
+            Some(t) => PointSpectrum::Table(t),
+            None => PointSpectrum::Exact { spectrum, weight },
+        }
+    }
+
+    /// weight(|k|) P(kx, kz), |k| = `k` > 0.
+    #[inline]
+    fn p(&self, kx: f64, kz: f64, k: f64) -> f64 {
+        match self {
+            PointSpectrum::Exact { spectrum, weight } => {
+                spectrum.p_k_at(kx, kz, k, spectrum.omega(k)) * weight(k)
+            }
+            PointSpectrum::Table(t) => t.p_k_at(kx, kz, k),
+        }
+    }
+
+    /// The spreading's angular width at |k| = `k`.
+    #[inline]
+    fn width(&self, k: f64) -> f64 {
+        match self {
+            PointSpectrum::Exact { spectrum, .. } => spectrum.spreading_width(spectrum.omega(k)),
+            PointSpectrum::Table(t) => t.spreading_width(k),
+        }
+    }
+}
+
 /// Integral of weight(|k|) P(-k) over the cell of side `dk` centred on (kx, kz) (h0(k) is drawn
 /// from P(-k); see the module doc), on a sub-grid fine enough that each sub-cell spans at most
 /// half the spreading's angular width (the paper's cases spread a few degrees, less than a cell
 /// near the peak of a coarse-gridded layer) and 8 x 8 near k = 0.
-fn cell_integral(
-    spectrum: &Spectrum,
-    weight: &(dyn Fn(f64) -> f64 + Sync),
-    kx: f64,
-    kz: f64,
-    dk: f64,
-) -> f64 {
-    let k = kx.hypot(kz);
-    let omega = spectrum.omega(k);
+fn cell_integral(p: &PointSpectrum, kx: f64, kz: f64, k: f64, dk: f64) -> f64 {
     let cell_angle = dk / k;
-    let width = spectrum.spreading_width(omega);
-    let mut m = (2.0 * cell_angle / width).ceil().clamp(1.0, 16.0) as usize;
+    let mut m = (2.0 * cell_angle / p.width(k)).ceil().clamp(1.0, 16.0) as usize;
     if k < SUBCELL_RADIUS * dk {
         m = m.max(8);
     }
     if m == 1 {
-        // |-k| = k, so what p_k(-kx, -kz) would compute first is known
-        return spectrum.p_k_at(-kx, -kz, k, omega) * dk * dk * weight(k);
+        return p.p(-kx, -kz, k) * dk * dk;
     }
     let sub = dk / m as f64;
     let centre = 0.5 * (m - 1) as f64;
@@ -45,7 +80,10 @@ fn cell_integral(
         for b in 0..m {
             let x = kx + (a as f64 - centre) * sub;
             let z = kz + (b as f64 - centre) * sub;
-            sum += spectrum.p_k(-x, -z) * weight(x.hypot(z));
+            let k = (x * x + z * z).sqrt();
+            if k > 0.0 {
+                sum += p.p(-x, -z, k);
+            }
         }
     }
     sum * sub * sub
@@ -71,16 +109,15 @@ const WORDS_PER_CELL: u128 = 4;
 /// are drawn: only cells with energy seek to their words and draw (a coarse layer's band fills
 /// a fifth of its grid).
 pub(super) fn draw(
-    spectrum: &Spectrum,
+    spectrum: &PointSpectrum,
     n: usize,
     dk: f64,
     band: (f64, f64),
-    weight: &(dyn Fn(f64) -> f64 + Sync),
     seed: u64,
 ) -> (Vec<C32>, f64) {
     let half = n / 2;
     let signed = move |i: usize| signed_index(i, n);
-    let mut h0 = vec![C32::default(); n * n];
+    let mut h0 = crate::memory::large_zeroed(n * n);
     let row_variance: Vec<f64> = h0
         .par_chunks_mut(n)
         .enumerate()
@@ -99,11 +136,11 @@ pub(super) fn draw(
                     continue;
                 }
                 let kz = signed(iz) * dk;
-                let k = kx.hypot(kz);
+                let k = (kx * kx + kz * kz).sqrt();
                 if !(k >= band.0 && k < band.1) {
                     continue;
                 }
-                let cell = cell_integral(spectrum, weight, kx, kz, dk);
+                let cell = cell_integral(spectrum, kx, kz, k, dk);
                 if cell > 0.0 {
                     let at = WORDS_PER_CELL * iz as u128;
                     // a seek refills ChaCha's block buffer: only where the previous cell was skipped

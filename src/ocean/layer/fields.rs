@@ -33,10 +33,11 @@ impl Layer {
     ///
     /// Four planes A_j = F_{2j} + i F_{2j+1} = h~ m_j(k) hold the field pairs (h, Dx),
     /// (Dz, dh/dx), (dh/dz, dDx/dx), (dDz/dz, dDx/dz), with D~ = i lambda k/|k| h~ and
-    /// d/dx -> i kx. Each kx row is filled and transformed along kz while it is in cache (h~ and
-    /// the multipliers once per cell for all four planes; a row outside the band stays zero and
-    /// skips its transforms), each plane is transposed, and each z row is transformed along kx
-    /// and written into its texels once, all eight fields together.
+    /// d/dx -> i kx. The planes keep only the kx rows inside the band (a coarse layer's band
+    /// reaches half its Nyquist: half the rows). Each row is filled and transformed along kz
+    /// while it is in cache (h~ and the multipliers once per cell for all four planes). Then
+    /// blocks of z columns are gathered from the rows, zero outside them, transformed along kx
+    /// and written into their texels once, all eight fields together.
     pub fn compute_fields(&mut self, t: f64) {
         let n = self.n;
         self.time_s = t;
@@ -44,7 +45,12 @@ impl Layer {
         let signed = move |i: usize| signed_index(i, n);
         let lam = self.choppiness;
         let scratch_len = self.fft.get_inplace_scratch_len();
-        let mut planes: [Vec<C32>; 4] = std::array::from_fn(|_| vec![C32::default(); n * n]);
+        // |kx| < k_max holds every non-zero h~ (h0 is zero outside the band and at Nyquist)
+        let rows: Vec<usize> = (0..n)
+            .filter(|&ix| ix != n / 2 && signed(ix).abs() * dk < self.k_max)
+            .collect();
+        let mut planes: [Vec<C32>; 4] =
+            std::array::from_fn(|_| crate::memory::large_zeroed(rows.len() * n));
         {
             let this = &*self;
             let [p0, p1, p2, p3] = &mut planes;
@@ -52,10 +58,10 @@ impl Layer {
                 .zip(p1.par_chunks_mut(n))
                 .zip(p2.par_chunks_mut(n))
                 .zip(p3.par_chunks_mut(n))
-                .enumerate()
+                .zip(rows.par_iter())
                 .for_each_init(
                     || vec![C32::default(); scratch_len],
-                    |scratch, (ix, (((r0, r1), r2), r3))| {
+                    |scratch, ((((r0, r1), r2), r3), &ix)| {
                         let kx = signed(ix) * dk;
                         let rows = [r0, r1, r2, r3];
                         let mut any = false;
@@ -80,32 +86,41 @@ impl Layer {
                     },
                 );
         }
-        // [kx][z] -> [z][kx], one plane at a time through one spare plane
-        let mut spare = vec![C32::default(); n * n];
-        for plane in &mut planes {
-            transpose(plane, &mut spare, n);
-            std::mem::swap(plane, &mut spare);
-        }
-        drop(spare);
+        // Blocks of COLUMNS z rows: gathered over kx (runs of COLUMNS values per stored row),
+        // transformed along kx, and each texel written once.
+        const COLUMNS: usize = 16;
         let fft = &self.fft;
-        let [p0, p1, p2, p3] = &mut planes;
+        let (planes, rows) = (&planes, &rows);
         self.fields
-            .par_chunks_mut(n)
-            .zip(p0.par_chunks_mut(n))
-            .zip(p1.par_chunks_mut(n))
-            .zip(p2.par_chunks_mut(n))
-            .zip(p3.par_chunks_mut(n))
+            .par_chunks_mut(n * COLUMNS)
+            .enumerate()
             .for_each_init(
-                || vec![C32::default(); scratch_len],
-                |scratch, ((((out, r0), r1), r2), r3)| {
-                    let mut rows = [r0, r1, r2, r3];
-                    for row in rows.iter_mut() {
-                        fft.process_with_scratch(row, scratch);
+                || {
+                    let buf: [Vec<C32>; 4] =
+                        std::array::from_fn(|_| vec![C32::default(); COLUMNS * n]);
+                    (buf, vec![C32::default(); scratch_len])
+                },
+                |(buf, scratch), (block, out)| {
+                    let z0 = block * COLUMNS;
+                    let width = out.len() / n;
+                    for (plane, b) in planes.iter().zip(buf.iter_mut()) {
+                        let b = &mut b[..width * n];
+                        b.fill(C32::default());
+                        for (r, &ix) in rows.iter().enumerate() {
+                            let run = &plane[r * n + z0..r * n + z0 + width];
+                            for (dz, v) in run.iter().enumerate() {
+                                b[dz * n + ix] = *v;
+                            }
+                        }
+                        fft.process_with_scratch(b, scratch);
                     }
-                    for (x, texel) in out.iter_mut().enumerate() {
-                        for j in 0..4 {
-                            texel[2 * j] = rows[j][x].re;
-                            texel[2 * j + 1] = rows[j][x].im;
+                    for (dz, texels) in out.chunks_mut(n).enumerate() {
+                        for (x, texel) in texels.iter_mut().enumerate() {
+                            for j in 0..4 {
+                                let v = buf[j][dz * n + x];
+                                texel[2 * j] = v.re;
+                                texel[2 * j + 1] = v.im;
+                            }
                         }
                     }
                 },
@@ -160,6 +175,7 @@ fn multipliers(lam: f64, kx: f64, kz: f64) -> [C32; 4] {
     .map(|m| C32::new(m.re as f32, m.im as f32))
 }
 
+#[cfg(test)]
 /// Out-of-place transpose of an n x n matrix in row blocks, so reads stay in short runs.
 fn transpose(src: &[C32], dst: &mut [C32], n: usize) {
     const B: usize = 16;

@@ -173,8 +173,36 @@ impl Layer {
         let dk = TAU / size_m;
         let k_nyquist = 0.5 * n as f64 * dk;
         let band = (band.0, band.1.min(k_nyquist));
-        let (h0, expected_variance) =
-            amplitudes::draw(spectrum, n, dk, band, weight, splitmix64(seed));
+        // a cell's sub-grid reaches dk / sqrt(2) past its centre; the table's nodes depend on
+        // the grid, not on the band, so a cell's amplitude does not either
+        let point = amplitudes::PointSpectrum::new(spectrum, weight, k_nyquist + dk);
+        Ok(Layer::build(
+            &point,
+            spectrum.depth_m,
+            size_m,
+            n,
+            band,
+            choppiness,
+            seed,
+            time_s,
+        ))
+    }
+
+    /// The layer of [`Layer::with_weight`] once its arguments are checked and its band clipped,
+    /// drawing from `point` (the radial table or, in tests, the exact spectrum).
+    #[allow(clippy::too_many_arguments)]
+    fn build(
+        point: &amplitudes::PointSpectrum,
+        depth_m: f64,
+        size_m: f64,
+        n: usize,
+        band: (f64, f64),
+        choppiness: f64,
+        seed: u64,
+        time_s: f64,
+    ) -> Layer {
+        let dk = TAU / size_m;
+        let (h0, expected_variance) = amplitudes::draw(point, n, dk, band, splitmix64(seed));
         let fft = FftPlanner::<f32>::new().plan_fft_inverse(n);
         let mut layer = Layer {
             size_m,
@@ -184,14 +212,14 @@ impl Layer {
             choppiness,
             time_s,
             h0,
-            depth_m: spectrum.depth_m,
+            depth_m,
             expected_variance,
-            fields: vec![[0.0; FIELD_COUNT]; n * n],
+            fields: crate::memory::large_zeroed(n * n),
             fft,
             inv_dx: n as f64 / size_m,
         };
         layer.compute_fields(time_s);
-        Ok(layer)
+        layer
     }
 
     pub fn size_m(&self) -> f64 {

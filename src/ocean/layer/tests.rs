@@ -371,3 +371,81 @@ fn a_cells_amplitude_does_not_depend_on_the_band() {
     }
     assert!(shared > 300, "{shared} shared cells with energy");
 }
+
+/// The radial table that draws the amplitudes against the spectrum's own formulas: the same
+/// cells and random numbers, so h0 within 5e-5 of its RMS and every field within 1e-4 of its
+/// RMS (the build's accuracy bound; measured 1e-6 to 2e-5). Seas: the default (case 22, spreading exponent 84 at the
+/// peak), Beaufort 5 with a crossing swell (three partitions), a storm, and a 30 m deep sea with
+/// the spreading capped; layers put each sea's peak inside a 256-texel grid.
+#[test]
+fn table_matches_exact_spectrum() {
+    use super::amplitudes::PointSpectrum;
+    let mut seas = vec![OceanParams::default()];
+    let mut b5 = OceanParams {
+        beaufort: Some(5),
+        ..OceanParams::default()
+    };
+    b5.apply_preset();
+    b5.swell.push(crate::ocean::SwellParams {
+        hs_m: 1.2,
+        tp_s: 9.0,
+        dir_deg: 70.0,
+        spreading_s: 25.0,
+        gamma: 3.3,
+    });
+    seas.push(b5);
+    seas.push(OceanParams {
+        wind_speed: 20.0,
+        fetch_km: 400.0,
+        ..OceanParams::default()
+    });
+    seas.push(OceanParams {
+        depth_m: 30.0,
+        spreading_cap: Some(25.0),
+        wind_dir_deg: -40.0,
+        ..OceanParams::default()
+    });
+    for (i, p) in seas.iter().enumerate() {
+        let spectrum = spectrum(p);
+        let peak_m = TAU / spectrum.peak_wavenumber();
+        let size_m = 12.0 * peak_m;
+        let n = 256;
+        let dk = TAU / size_m;
+        let band = (0.5 * dk, 0.5 * n as f64 * dk);
+        let weight = |k: f64| (1.0 + (k / (10.0 * dk)).powi(2)).recip();
+        let table = PointSpectrum::new(&spectrum, &weight, band.1 + dk);
+        assert!(matches!(table, PointSpectrum::Table(_)), "sea {i}");
+        let exact = PointSpectrum::Exact {
+            spectrum: &spectrum,
+            weight: &weight,
+        };
+        let build = |point| Layer::build(point, p.depth_m, size_m, n, band, 1.0, 7, 2.5);
+        let (fast, slow) = (build(&table), build(&exact));
+        let rel = |a: &mut dyn Iterator<Item = (f64, f64)>| {
+            let (d, r) = a.fold((0.0, 0.0), |(d, r), (x, y)| {
+                (d + (x - y).powi(2), r + y * y)
+            });
+            (d / r).sqrt()
+        };
+        let h0 = rel(&mut fast
+            .h0
+            .iter()
+            .zip(&slow.h0)
+            .flat_map(|(a, b)| [(a.re as f64, b.re as f64), (a.im as f64, b.im as f64)]));
+        assert!(h0 < 5e-5, "sea {i}: h0 differs by {h0:.2e} of its RMS");
+        assert!(
+            (fast.expected_variance / slow.expected_variance - 1.0).abs() < 1e-4,
+            "sea {i}: variance {} vs {}",
+            fast.expected_variance,
+            slow.expected_variance
+        );
+        for j in 0..FIELD_COUNT {
+            let e = rel(&mut fast
+                .fields()
+                .iter()
+                .zip(slow.fields())
+                .map(|(a, b)| (a[j] as f64, b[j] as f64)));
+            assert!(e < 1e-4, "sea {i}: field {j} differs by {e:.2e} of its RMS");
+        }
+    }
+}
