@@ -53,50 +53,113 @@ unsafe impl Zero for f32 {}
 unsafe impl<const N: usize> Zero for [f32; N] {}
 unsafe impl Zero for rustfft::num_complex::Complex<f32> {}
 
-/// A zeroed vector of `len` values whose pages the kernel is asked to back with transparent
-/// huge pages (2 MiB) before anything touches them. The ocean's fields and FFT planes are
-/// hundreds of MB written once: with 4 KiB pages a third of the build went to page faults.
-/// The memory comes zeroed from the allocator (fresh pages, not written here), so the threads
-/// that fill it fault its pages in. Where huge pages are off
-/// (`/sys/kernel/mm/transparent_hugepage/enabled` = never) or the system is not Linux, this is
-/// a plain zeroed vector.
-pub fn large_zeroed<T: Zero>(len: usize) -> Vec<T> {
-    let layout = std::alloc::Layout::array::<T>(len).expect("a buffer that fits in memory");
-    if layout.size() == 0 {
-        return Vec::new();
-    }
-    // SAFETY: the layout has a non-zero size; all-zero bytes are valid T (`Zero`), so the
-    // vector's `len` values are initialised, and it owns the allocation made with its layout.
-    unsafe {
-        let ptr = std::alloc::alloc_zeroed(layout);
-        if ptr.is_null() {
-            std::alloc::handle_alloc_error(layout);
+/// A zeroed buffer of `len` values in its own memory mapping, whose pages the kernel is asked
+/// to back with transparent huge pages (2 MiB) before anything touches them. The ocean's fields
+/// and FFT planes are hundreds of MB written once: with 4 KiB pages a third of the build went
+/// to page faults. The mapping is the buffer's alone: from the allocator, a buffer under its
+/// mmap threshold can sit in the heap, and the advice then outlives the buffer (the heap's
+/// later small allocations each faulted and cleared a whole 2 MiB page: 0.6 s of a render).
+/// Where huge pages are off (`/sys/kernel/mm/transparent_hugepage/enabled` = never) the pages
+/// are ordinary ones; off Unix it is a plain vector.
+pub struct LargeBuf<T: Zero> {
+    #[cfg(unix)]
+    ptr: std::ptr::NonNull<T>,
+    #[cfg(unix)]
+    len: usize,
+    #[cfg(not(unix))]
+    vec: Vec<T>,
+}
+
+// SAFETY: the buffer owns its values as a Vec would.
+unsafe impl<T: Zero + Send> Send for LargeBuf<T> {}
+unsafe impl<T: Zero + Sync> Sync for LargeBuf<T> {}
+
+impl<T: Zero> LargeBuf<T> {
+    /// `len` zeros.
+    #[cfg(unix)]
+    pub fn zeroed(len: usize) -> LargeBuf<T> {
+        let bytes = std::mem::size_of::<T>()
+            .checked_mul(len)
+            .expect("a buffer that fits in memory");
+        if bytes == 0 {
+            return LargeBuf {
+                ptr: std::ptr::NonNull::dangling(),
+                len,
+            };
         }
-        advise_huge_pages(ptr as usize, layout.size());
-        Vec::from_raw_parts(ptr as *mut T, len, len)
+        // SAFETY: an anonymous private mapping of `bytes` is fresh zeroed memory, page-aligned
+        // (so aligned for T); all-zero bytes are valid T (`Zero`). The advice only changes how
+        // the pages are backed; a refusal (no transparent huge pages) is ignored.
+        unsafe {
+            let p = libc::mmap(
+                std::ptr::null_mut(),
+                bytes,
+                libc::PROT_READ | libc::PROT_WRITE,
+                libc::MAP_PRIVATE | libc::MAP_ANONYMOUS,
+                -1,
+                0,
+            );
+            if p == libc::MAP_FAILED {
+                std::alloc::handle_alloc_error(std::alloc::Layout::array::<T>(len).unwrap());
+            }
+            #[cfg(target_os = "linux")]
+            if bytes >= 4 << 20 {
+                libc::madvise(p, bytes, libc::MADV_HUGEPAGE);
+            }
+            LargeBuf {
+                ptr: std::ptr::NonNull::new_unchecked(p as *mut T),
+                len,
+            }
+        }
+    }
+
+    /// `len` zeros.
+    #[cfg(not(unix))]
+    pub fn zeroed(len: usize) -> LargeBuf<T> {
+        // SAFETY: all-zero bytes are valid T (`Zero`)
+        LargeBuf {
+            vec: vec![unsafe { std::mem::zeroed() }; len],
+        }
     }
 }
 
-#[cfg(target_os = "linux")]
-fn advise_huge_pages(start: usize, bytes: usize) {
-    const PAGE: usize = 4096;
-    const HUGE: usize = 2 << 20;
-    if bytes < 2 * HUGE {
-        return;
-    }
-    // madvise wants a page-aligned start; the range may end mid-page
-    let aligned = start.next_multiple_of(PAGE);
-    let len = (start + bytes).saturating_sub(aligned);
-    // SAFETY: the range lies inside this allocation, which nothing has touched yet; the
-    // advice changes how its pages are backed, never their contents. A refusal (EINVAL where
-    // transparent huge pages are not built in) leaves the ordinary pages, so it is ignored.
-    unsafe {
-        libc::madvise(aligned as *mut libc::c_void, len, libc::MADV_HUGEPAGE);
+#[cfg(unix)]
+impl<T: Zero> Drop for LargeBuf<T> {
+    fn drop(&mut self) {
+        let bytes = std::mem::size_of::<T>() * self.len;
+        if bytes > 0 {
+            // SAFETY: the mapping was made in `zeroed` with this size and is unmapped once.
+            unsafe {
+                libc::munmap(self.ptr.as_ptr() as *mut libc::c_void, bytes);
+            }
+        }
     }
 }
 
-#[cfg(not(target_os = "linux"))]
-fn advise_huge_pages(_start: usize, _bytes: usize) {}
+impl<T: Zero> std::ops::Deref for LargeBuf<T> {
+    type Target = [T];
+    #[cfg(unix)]
+    fn deref(&self) -> &[T] {
+        // SAFETY: `len` initialised values live at `ptr` for the buffer's lifetime
+        unsafe { std::slice::from_raw_parts(self.ptr.as_ptr(), self.len) }
+    }
+    #[cfg(not(unix))]
+    fn deref(&self) -> &[T] {
+        &self.vec
+    }
+}
+
+impl<T: Zero> std::ops::DerefMut for LargeBuf<T> {
+    #[cfg(unix)]
+    fn deref_mut(&mut self) -> &mut [T] {
+        // SAFETY: as `deref`, and `&mut self` makes the access unique
+        unsafe { std::slice::from_raw_parts_mut(self.ptr.as_ptr(), self.len) }
+    }
+    #[cfg(not(unix))]
+    fn deref_mut(&mut self) -> &mut [T] {
+        &mut self.vec
+    }
+}
 
 /// Bytes as "1.23 GB".
 pub fn gigabytes(b: u64) -> String {
@@ -106,15 +169,17 @@ pub fn gigabytes(b: u64) -> String {
 #[cfg(test)]
 mod tests {
     #[test]
-    fn large_zeroed_is_zero_and_writable() {
-        let mut v = super::large_zeroed::<[f32; 8]>(1 << 20);
+    fn large_buffers_are_zero_and_writable() {
+        use super::LargeBuf;
+        let mut v = LargeBuf::<[f32; 8]>::zeroed(1 << 20);
         assert_eq!(v.len(), 1 << 20);
         assert!(v.iter().all(|t| *t == [0.0; 8]));
         v[12345][3] = 1.5;
-        v.push([2.0; 8]);
-        assert_eq!((v[12345][3], v[1 << 20][0]), (1.5, 2.0));
-        assert!(super::large_zeroed::<f32>(5).iter().all(|&x| x == 0.0));
-        assert!(super::large_zeroed::<f32>(0).is_empty());
+        v[(1 << 20) - 1][7] = 2.0;
+        assert_eq!((v[12345][3], v[(1 << 20) - 1][7]), (1.5, 2.0));
+        assert_eq!(v.iter().flatten().sum::<f32>(), 3.5);
+        assert!(LargeBuf::<f32>::zeroed(5).iter().all(|&x| x == 0.0));
+        assert!(LargeBuf::<f32>::zeroed(0).is_empty());
     }
 
     #[test]

@@ -37,6 +37,7 @@ use rustfft::{Fft, FftPlanner};
 use super::OceanError;
 use super::spectrum::Spectrum;
 use crate::config::ocean::{MAX_N, MIN_N};
+use crate::memory::LargeBuf;
 use crate::rng::splitmix64;
 
 mod amplitudes;
@@ -89,13 +90,13 @@ pub struct Layer {
     choppiness: f64,
     time_s: f64,
     /// h0(k), kx-major (index ix * n + iz), zero outside the band.
-    h0: Vec<C32>,
+    h0: LargeBuf<C32>,
     /// Water depth for the dispersion relation: omega(|k|) is computed where h0 is non-zero
     /// rather than stored (64 MB for a 2048-texel layer).
     depth_m: f64,
     expected_variance: f64,
     /// Texels, z-major (index iz * n + ix); texel (ix, iz) is at (ix L/n, iz L/n).
-    fields: Vec<Texel>,
+    fields: LargeBuf<Texel>,
     fft: Arc<dyn Fft<f32>>,
     inv_dx: f64,
 }
@@ -214,7 +215,7 @@ impl Layer {
             h0,
             depth_m,
             expected_variance,
-            fields: crate::memory::large_zeroed(n * n),
+            fields: LargeBuf::zeroed(n * n),
             fft,
             inv_dx: n as f64 / size_m,
         };

@@ -355,7 +355,7 @@ fn a_cells_amplitude_does_not_depend_on_the_band() {
     let narrow = layer((6.0 * dk, 12.0 * dk));
     let wide = layer((2.0 * dk, 30.0 * dk));
     let mut shared = 0;
-    for (i, (a, b)) in narrow.h0.iter().zip(&wide.h0).enumerate() {
+    for (i, (a, b)) in narrow.h0.iter().zip(wide.h0.iter()).enumerate() {
         let (ix, iz) = (i / n, i % n);
         let k = signed_index(ix, n).hypot(signed_index(iz, n)) * dk;
         if (6.0 * dk..12.0 * dk).contains(&k) {
@@ -430,7 +430,7 @@ fn table_matches_exact_spectrum() {
         let h0 = rel(&mut fast
             .h0
             .iter()
-            .zip(&slow.h0)
+            .zip(slow.h0.iter())
             .flat_map(|(a, b)| [(a.re as f64, b.re as f64), (a.im as f64, b.im as f64)]));
         assert!(h0 < 5e-5, "sea {i}: h0 differs by {h0:.2e} of its RMS");
         assert!(
