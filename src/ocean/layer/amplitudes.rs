@@ -8,7 +8,6 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::{C32, signed_index};
-use crate::memory::LargeBuf;
 use crate::ocean::spectrum::{RadialTable, Spectrum};
 
 /// Cells closer to k = 0 than this many fundamentals are integrated on at least an 8 x 8
@@ -115,10 +114,10 @@ pub(super) fn draw(
     dk: f64,
     band: (f64, f64),
     seed: u64,
-) -> (LargeBuf<C32>, f64) {
+) -> (Vec<C32>, f64) {
     let half = n / 2;
     let signed = move |i: usize| signed_index(i, n);
-    let mut h0 = LargeBuf::zeroed(n * n);
+    let mut h0 = vec![C32::default(); n * n];
     let row_variance: Vec<f64> = h0
         .par_chunks_mut(n)
         .enumerate()

@@ -7,7 +7,6 @@ use rayon::prelude::*;
 use rustfft::num_complex::Complex;
 
 use super::{C32, Layer, signed_index};
-use crate::memory::LargeBuf;
 
 impl Layer {
     /// h~(k, t) of eq. 2 for cell `i` (kx-major) in f64.
@@ -50,8 +49,8 @@ impl Layer {
         let rows: Vec<usize> = (0..n)
             .filter(|&ix| ix != n / 2 && signed(ix).abs() * dk < self.k_max)
             .collect();
-        let mut planes: [LargeBuf<C32>; 4] =
-            std::array::from_fn(|_| LargeBuf::zeroed(rows.len() * n));
+        let mut planes: [Vec<C32>; 4] =
+            std::array::from_fn(|_| vec![C32::default(); rows.len() * n]);
         {
             let this = &*self;
             let [p0, p1, p2, p3] = &mut planes;

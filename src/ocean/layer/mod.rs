@@ -37,7 +37,6 @@ use rustfft::{Fft, FftPlanner};
 use super::OceanError;
 use super::spectrum::Spectrum;
 use crate::config::ocean::{MAX_N, MIN_N};
-use crate::memory::LargeBuf;
 use crate::rng::splitmix64;
 
 mod amplitudes;
@@ -90,13 +89,13 @@ pub struct Layer {
     choppiness: f64,
     time_s: f64,
     /// h0(k), kx-major (index ix * n + iz), zero outside the band.
-    h0: LargeBuf<C32>,
+    h0: Vec<C32>,
     /// Water depth for the dispersion relation: omega(|k|) is computed where h0 is non-zero
     /// rather than stored (64 MB for a 2048-texel layer).
     depth_m: f64,
     expected_variance: f64,
     /// Texels, z-major (index iz * n + ix); texel (ix, iz) is at (ix L/n, iz L/n).
-    fields: LargeBuf<Texel>,
+    fields: Vec<Texel>,
     fft: Arc<dyn Fft<f32>>,
     inv_dx: f64,
 }
@@ -215,7 +214,7 @@ impl Layer {
             h0,
             depth_m,
             expected_variance,
-            fields: LargeBuf::zeroed(n * n),
+            fields: vec![[0.0; FIELD_COUNT]; n * n],
             fft,
             inv_dx: n as f64 / size_m,
         };
