@@ -175,8 +175,9 @@ fn multipliers(lam: f64, kx: f64, kz: f64) -> [C32; 4] {
     .map(|m| C32::new(m.re as f32, m.im as f32))
 }
 
+/// Out-of-place transpose of an n x n matrix in row blocks, so reads stay in short runs (the
+/// tests' reference transform).
 #[cfg(test)]
-/// Out-of-place transpose of an n x n matrix in row blocks, so reads stay in short runs.
 fn transpose(src: &[C32], dst: &mut [C32], n: usize) {
     const B: usize = 16;
     dst.par_chunks_mut(n * B)
