@@ -18,11 +18,10 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use rayon::prelude::*;
-use serde::Serialize;
 
 use super::layer::{FIELD_COUNT, Layer, SLOPES, Slopes, Texel, add_texel, field, slopes};
-use super::spectrum::{Part, Spectrum};
-use super::{Interp, MAX_LAYERS, OceanError, OceanParams, SpectrumKind, SpreadingKind};
+use super::spectrum::Spectrum;
+use super::{Interp, MAX_LAYERS, OceanError, OceanParams};
 
 /// Side of the jittered grid that estimates the folded fraction and RMS of the summed surface
 /// over the coarsest layer's period (stderr of a fraction p: sqrt(p / 512^2)).
@@ -54,6 +53,8 @@ struct Stats {
     /// them at the jittered points.
     grid_mss: Vec<f64>,
     lookup_mss: Vec<f64>,
+    /// Per layer: the mean of h^2 over its grid points (its variance over the period).
+    grid_variance: Vec<f64>,
 }
 
 /// |grad h|^2 of a texel (or of summed fields).
@@ -206,82 +207,6 @@ impl Sampler<'_> {
     }
 }
 
-/// Per-layer part of [`OceanSummary`].
-#[derive(Clone, Debug, Serialize)]
-pub struct LayerSummary {
-    pub size_m: f64,
-    pub n: usize,
-    pub spacing_m: f64,
-    /// Where the layer's share of the wavenumbers is non-zero, [k_min, k_max), rad/m.
-    pub k_min: f64,
-    pub k_max: f64,
-    /// sqrt of the integral of the layer's share of the (scaled) spectrum, m.
-    pub spectrum_rms_m: f64,
-    pub realization_rms_m: f64,
-    /// Mean square slope |grad h|^2: the integral of k^2 over the layer's share of the
-    /// (scaled) spectrum; over the grid points (the realization's exact gradients); and as the
-    /// renderer reads it between them (the surface's interpolation, at random points).
-    pub mss_spectrum: f64,
-    pub mss_grid: f64,
-    pub mss_lookup: f64,
-    /// Where this layer alone folds.
-    pub folded_fraction: f64,
-}
-
-/// One partition of the sea state (the wind sea or a swell) as the layers carry it.
-#[derive(Clone, Debug, Serialize)]
-pub struct PartitionSummary {
-    /// "wind sea", "swell 1", ...
-    pub name: String,
-    /// 4 x the RMS height of its share of the (scaled) spectrum over the layers' wavenumbers, m.
-    pub hs_m: f64,
-    /// Its share of that variance, 0-1.
-    pub variance_share: f64,
-    pub peak_period_s: f64,
-    pub peak_wavelength_m: f64,
-    /// Direction its waves travel towards, degrees from +x towards +z.
-    pub direction_deg: f64,
-}
-
-/// What was generated, for the JSON sidecar.
-#[derive(Clone, Debug, Serialize)]
-pub struct OceanSummary {
-    pub seed: u64,
-    pub spectrum: Option<SpectrumKind>,
-    pub spreading: Option<SpreadingKind>,
-    pub alpha: f64,
-    pub omega_p_rad_s: f64,
-    pub peak_wavelength_m: f64,
-    /// RMS of the whole model spectrum before any scaling to `rms_m`, m.
-    pub model_rms_m: f64,
-    /// sqrt of the integral of P over the union of the layers' bands, times the amplitude scale.
-    pub spectrum_rms_m: f64,
-    /// sqrt of the sum of the layers' grid variances at `time_s` (independent layers: the
-    /// variance of their sum, in expectation).
-    pub realization_rms_m: f64,
-    /// RMS of the summed, interpolated surface on a jittered grid over the coarsest period.
-    pub sampled_rms_m: f64,
-    /// Mean square slope |grad h|^2 of the whole surface: the layers' spectrum and grid figures
-    /// summed, and the summed surface as the renderer reads it (same jittered grid). Slopes of
-    /// h over the undisplaced plane: the normal (eq. 7) adds the displacement's derivatives.
-    pub mss_spectrum: f64,
-    pub mss_grid: f64,
-    pub mss_lookup: f64,
-    /// Significant wave height 4 x realization RMS, m.
-    pub hs_m: f64,
-    /// The significant wave height asked for (`hs_m`, or 4 x `rms_m`), m; none without a target.
-    pub hs_target_m: Option<f64>,
-    /// Factor applied to the amplitudes to reach `rms_m` (1 without a target).
-    pub amplitude_scale: f64,
-    /// Fraction of the summed surface with J <= 0 (same jittered grid).
-    pub folded_fraction: f64,
-    /// Wall-clock generation time, s.
-    pub seconds: f64,
-    pub layers: Vec<LayerSummary>,
-    /// The wind sea and each swell.
-    pub partitions: Vec<PartitionSummary>,
-}
-
 fn layer_seed(seed: u64, i: usize) -> u64 {
     seed ^ (i as u64 + 1).wrapping_mul(0xD1B5_4A32_D192_ED03)
 }
@@ -431,6 +356,17 @@ impl Surface {
     /// STATS_GRID^2 grid over the coarsest layer's period, each layer's mean square slope as read
     /// there and over its grid points; rows are summed in order so the result is thread-count
     /// free.
+    /// Fraction of the summed surface with J <= 0 (a jittered grid over the coarsest period).
+    pub fn folded_fraction(&self) -> f64 {
+        self.stats.folded_fraction
+    }
+
+    /// RMS height of the realization: sqrt of the sum of the layers' grid variances, m (as
+    /// [`OceanSummary::realization_rms_m`], without computing the summary).
+    pub fn realization_rms_m(&self) -> f64 {
+        self.stats.grid_variance.iter().sum::<f64>().sqrt()
+    }
+
     fn update_stats(&mut self) {
         self.summary = OnceLock::new();
         let Some(l0) = self.layers.first() else {
@@ -465,6 +401,26 @@ impl Surface {
                 row
             })
             .collect();
+        // Per layer over its grid points: mean |grad h|^2 and mean h^2, in fixed chunks summed
+        // in order (the same bits on any thread count).
+        let grid: Vec<(f64, f64)> = layers
+            .iter()
+            .map(|l| {
+                let f = l.fields();
+                let chunks: Vec<(f64, f64)> = f
+                    .par_chunks(4096)
+                    .map(|c| {
+                        c.iter().fold((0.0, 0.0), |(m, v), t| {
+                            (m + slope2(t), v + (t[field::H] as f64).powi(2))
+                        })
+                    })
+                    .collect();
+                let (m, v) = chunks
+                    .iter()
+                    .fold((0.0, 0.0), |(a, b), c| (a + c.0, b + c.1));
+                (m / f.len() as f64, v / f.len() as f64)
+            })
+            .collect();
         let total = (m * m) as f64;
         self.stats = Stats {
             folded_fraction: rows.iter().map(|r| r.0).sum::<usize>() as f64 / total,
@@ -473,123 +429,15 @@ impl Surface {
             lookup_mss: (0..layers.len())
                 .map(|i| rows.iter().map(|r| r.3[i]).sum::<f64>() / total)
                 .collect(),
-            grid_mss: layers
-                .iter()
-                .map(|l| {
-                    // fixed chunks summed in order: the same bits on any thread count
-                    let f = l.fields();
-                    let chunks: Vec<f64> = f
-                        .par_chunks(4096)
-                        .map(|c| c.iter().map(slope2).sum())
-                        .collect();
-                    chunks.iter().sum::<f64>() / f.len() as f64
-                })
-                .collect(),
+            grid_mss: grid.iter().map(|g| g.0).collect(),
+            grid_variance: grid.iter().map(|g| g.1).collect(),
         };
-    }
-
-    /// Generation statistics (see [`OceanSummary`]), computed once per ocean time.
-    pub fn summary(&self) -> &OceanSummary {
-        self.summary.get_or_init(|| self.compute_summary())
-    }
-
-    fn compute_summary(&self) -> OceanSummary {
-        let partition = self.params.partition();
-        let layers: Vec<LayerSummary> = self
-            .layers
-            .iter()
-            .enumerate()
-            .map(|(i, l)| {
-                let (k_min, k_max) = l.band();
-                let band = |moment: i32| {
-                    self.spectrum.as_ref().map_or(0.0, |s| {
-                        s.weighted_variance(k_min, k_max, |k| {
-                            k.powi(moment) * partition.weight(i, k)
-                        })
-                    })
-                };
-                let band_var = band(0);
-                LayerSummary {
-                    size_m: l.size_m(),
-                    n: l.n(),
-                    spacing_m: l.dx(),
-                    k_min,
-                    k_max,
-                    spectrum_rms_m: band_var.sqrt() * self.amplitude_scale,
-                    realization_rms_m: l.height_variance().sqrt(),
-                    mss_spectrum: band(2) * self.amplitude_scale.powi(2),
-                    mss_grid: self.stats.grid_mss.get(i).copied().unwrap_or(0.0),
-                    mss_lookup: self.stats.lookup_mss.get(i).copied().unwrap_or(0.0),
-                    folded_fraction: l.folded_fraction(),
-                }
-            })
-            .collect();
-        let spectrum_var: f64 = layers.iter().map(|l| l.spectrum_rms_m.powi(2)).sum();
-        let realization_var: f64 = layers.iter().map(|l| l.realization_rms_m.powi(2)).sum();
-        let s = self.spectrum.as_ref();
-        OceanSummary {
-            seed: self.seed,
-            spectrum: s.map(|s| s.kind),
-            spreading: s.map(|s| s.spreading),
-            alpha: s.map_or(0.0, |s| s.alpha),
-            omega_p_rad_s: s.map_or(0.0, |s| s.omega_p),
-            peak_wavelength_m: s.map_or(0.0, |s| std::f64::consts::TAU / s.peak_wavenumber()),
-            model_rms_m: s.map_or(0.0, |s| s.total_variance().sqrt()),
-            spectrum_rms_m: spectrum_var.sqrt(),
-            realization_rms_m: realization_var.sqrt(),
-            sampled_rms_m: self.stats.sampled_rms_m,
-            mss_spectrum: layers.iter().map(|l| l.mss_spectrum).sum(),
-            mss_grid: layers.iter().map(|l| l.mss_grid).sum(),
-            mss_lookup: self.stats.sampled_mss,
-            hs_m: 4.0 * realization_var.sqrt(),
-            hs_target_m: self.params.rms_target().map(|rms| 4.0 * rms),
-            amplitude_scale: self.amplitude_scale,
-            folded_fraction: self.stats.folded_fraction,
-            seconds: self.seconds,
-            partitions: self.partitions(&layers),
-            layers,
-        }
-    }
-
-    /// Each partition's expected share of the layers' variance (the wind sea first).
-    fn partitions(&self, layers: &[LayerSummary]) -> Vec<PartitionSummary> {
-        let Some(s) = self.spectrum.as_ref() else {
-            return Vec::new();
-        };
-        let k_lo = layers.iter().map(|l| l.k_min).fold(f64::INFINITY, f64::min);
-        let k_hi = layers.iter().map(|l| l.k_max).fold(0.0, f64::max);
-        let parts = std::iter::once(Part::Wind).chain((0..s.swells.len()).map(Part::Swell));
-        let var: Vec<(Part, f64)> = parts
-            .map(|p| {
-                (
-                    p,
-                    s.part_variance(p, k_lo, k_hi, |_| 1.0) * self.amplitude_scale.powi(2),
-                )
-            })
-            .collect();
-        let total: f64 = var.iter().map(|v| v.1).sum();
-        var.into_iter()
-            .map(|(part, v)| {
-                let (name, omega_p, dir) = match part {
-                    Part::Wind => ("wind sea".to_string(), s.omega_p, s.wind_dir_rad),
-                    Part::Swell(i) => {
-                        let w = &s.swells[i];
-                        (format!("swell {}", i + 1), w.omega_p, w.dir_rad)
-                    }
-                };
-                PartitionSummary {
-                    name,
-                    hs_m: 4.0 * v.sqrt(),
-                    variance_share: if total > 0.0 { v / total } else { 0.0 },
-                    peak_period_s: std::f64::consts::TAU / omega_p,
-                    peak_wavelength_m: std::f64::consts::TAU
-                        / crate::ocean::spectrum::wavenumber(omega_p, s.depth_m),
-                    direction_deg: dir.to_degrees(),
-                }
-            })
-            .collect()
     }
 }
+
+#[path = "surface_summary.rs"]
+mod summary;
+pub use summary::{LayerSummary, OceanSummary, PartitionSummary};
 
 #[cfg(test)]
 #[path = "surface_tests.rs"]

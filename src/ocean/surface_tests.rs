@@ -3,7 +3,7 @@
 //! origins, folding, and time.
 
 use super::*;
-use crate::ocean::LayerSpec;
+use crate::ocean::{LayerSpec, SpreadingKind};
 
 fn small(seed: u64) -> Surface {
     let p = OceanParams {

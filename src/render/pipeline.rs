@@ -259,7 +259,7 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
                     (Arc::new(ocean), t.elapsed().as_secs_f64())
                 }
             };
-            let folded = ocean.summary().folded_fraction;
+            let folded = ocean.folded_fraction();
             if folded > MAX_FOLDED_FRACTION {
                 return Err(RenderError::Folded {
                     folded,
@@ -364,7 +364,7 @@ impl Prepared {
         ))?;
         self.pool.install(|| ocean.set_time(time_s))?;
         let seconds_ocean = t.elapsed().as_secs_f64();
-        let folded = self.ocean.summary().folded_fraction;
+        let folded = self.ocean.folded_fraction();
         if folded > MAX_FOLDED_FRACTION {
             return Err(RenderError::Folded {
                 folded,
@@ -426,7 +426,7 @@ impl Prepared {
             .filter(|ring| ring.inner_m <= 2.0 * horizon_m)
             .map(|ring| ring.size_m * ring.size_m / (4.0 * r))
             .fold(0.0, f64::max);
-        let trough = TROUGH_SIGMAS * self.ocean.summary().realization_rms_m + sag;
+        let trough = TROUGH_SIGMAS * self.ocean.realization_rms_m() + sag;
         // cos(dip) = (R - trough) / (R + h); the direction's y is -sin(dip).
         let c = ((r - trough) / (r + camera_height_m)).min(1.0);
         -((1.0 - c * c).sqrt()) as f32
@@ -501,7 +501,7 @@ impl Prepared {
             });
         }
         let seconds_normal_map = c.normal_map_thread_seconds() / self.threads as f64;
-        let folded_fraction = self.ocean.summary().folded_fraction;
+        let folded_fraction = self.ocean.folded_fraction();
         let ocean_notes = self
             .ocean
             .spectrum()

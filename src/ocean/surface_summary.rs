@@ -1,0 +1,196 @@
+//! What a built ocean reports of itself ([`OceanSummary`]): per layer the spectrum's and the
+//! realization's RMS and mean square slopes, per partition its height and share, and the
+//! summed surface's statistics. Computed on first use and kept until the time changes; a render
+//! reads only the cheap figures ([`Surface::folded_fraction`], [`Surface::realization_rms_m`]).
+
+use serde::Serialize;
+
+use super::Surface;
+use crate::ocean::spectrum::Part;
+use crate::ocean::{SpectrumKind, SpreadingKind};
+
+/// Per-layer part of [`OceanSummary`].
+#[derive(Clone, Debug, Serialize)]
+pub struct LayerSummary {
+    pub size_m: f64,
+    pub n: usize,
+    pub spacing_m: f64,
+    /// Where the layer's share of the wavenumbers is non-zero, [k_min, k_max), rad/m.
+    pub k_min: f64,
+    pub k_max: f64,
+    /// sqrt of the integral of the layer's share of the (scaled) spectrum, m.
+    pub spectrum_rms_m: f64,
+    pub realization_rms_m: f64,
+    /// Mean square slope |grad h|^2: the integral of k^2 over the layer's share of the
+    /// (scaled) spectrum; over the grid points (the realization's exact gradients); and as the
+    /// renderer reads it between them (the surface's interpolation, at random points).
+    pub mss_spectrum: f64,
+    pub mss_grid: f64,
+    pub mss_lookup: f64,
+    /// Where this layer alone folds.
+    pub folded_fraction: f64,
+}
+
+/// One partition of the sea state (the wind sea or a swell) as the layers carry it.
+#[derive(Clone, Debug, Serialize)]
+pub struct PartitionSummary {
+    /// "wind sea", "swell 1", ...
+    pub name: String,
+    /// 4 x the RMS height of its share of the (scaled) spectrum over the layers' wavenumbers, m.
+    pub hs_m: f64,
+    /// Its share of that variance, 0-1.
+    pub variance_share: f64,
+    pub peak_period_s: f64,
+    pub peak_wavelength_m: f64,
+    /// Direction its waves travel towards, degrees from +x towards +z.
+    pub direction_deg: f64,
+}
+
+/// What was generated, for the JSON sidecar.
+#[derive(Clone, Debug, Serialize)]
+pub struct OceanSummary {
+    pub seed: u64,
+    pub spectrum: Option<SpectrumKind>,
+    pub spreading: Option<SpreadingKind>,
+    pub alpha: f64,
+    pub omega_p_rad_s: f64,
+    pub peak_wavelength_m: f64,
+    /// RMS of the whole model spectrum before any scaling to `rms_m`, m.
+    pub model_rms_m: f64,
+    /// sqrt of the integral of P over the union of the layers' bands, times the amplitude scale.
+    pub spectrum_rms_m: f64,
+    /// sqrt of the sum of the layers' grid variances at `time_s` (independent layers: the
+    /// variance of their sum, in expectation).
+    pub realization_rms_m: f64,
+    /// RMS of the summed, interpolated surface on a jittered grid over the coarsest period.
+    pub sampled_rms_m: f64,
+    /// Mean square slope |grad h|^2 of the whole surface: the layers' spectrum and grid figures
+    /// summed, and the summed surface as the renderer reads it (same jittered grid). Slopes of
+    /// h over the undisplaced plane: the normal (eq. 7) adds the displacement's derivatives.
+    pub mss_spectrum: f64,
+    pub mss_grid: f64,
+    pub mss_lookup: f64,
+    /// Significant wave height 4 x realization RMS, m.
+    pub hs_m: f64,
+    /// The significant wave height asked for (`hs_m`, or 4 x `rms_m`), m; none without a target.
+    pub hs_target_m: Option<f64>,
+    /// Factor applied to the amplitudes to reach `rms_m` (1 without a target).
+    pub amplitude_scale: f64,
+    /// Fraction of the summed surface with J <= 0 (same jittered grid).
+    pub folded_fraction: f64,
+    /// Wall-clock generation time, s.
+    pub seconds: f64,
+    pub layers: Vec<LayerSummary>,
+    /// The wind sea and each swell.
+    pub partitions: Vec<PartitionSummary>,
+}
+
+impl Surface {
+    /// Generation statistics (see [`OceanSummary`]), computed once per ocean time.
+    pub fn summary(&self) -> &OceanSummary {
+        self.summary.get_or_init(|| self.compute_summary())
+    }
+
+    fn compute_summary(&self) -> OceanSummary {
+        let partition = self.params.partition();
+        let layers: Vec<LayerSummary> = self
+            .layers
+            .iter()
+            .enumerate()
+            .map(|(i, l)| {
+                let (k_min, k_max) = l.band();
+                let band = |moment: i32| {
+                    self.spectrum.as_ref().map_or(0.0, |s| {
+                        s.weighted_variance(k_min, k_max, |k| {
+                            k.powi(moment) * partition.weight(i, k)
+                        })
+                    })
+                };
+                let band_var = band(0);
+                LayerSummary {
+                    size_m: l.size_m(),
+                    n: l.n(),
+                    spacing_m: l.dx(),
+                    k_min,
+                    k_max,
+                    spectrum_rms_m: band_var.sqrt() * self.amplitude_scale,
+                    realization_rms_m: self
+                        .stats
+                        .grid_variance
+                        .get(i)
+                        .copied()
+                        .unwrap_or(0.0)
+                        .sqrt(),
+                    mss_spectrum: band(2) * self.amplitude_scale.powi(2),
+                    mss_grid: self.stats.grid_mss.get(i).copied().unwrap_or(0.0),
+                    mss_lookup: self.stats.lookup_mss.get(i).copied().unwrap_or(0.0),
+                    folded_fraction: l.folded_fraction(),
+                }
+            })
+            .collect();
+        let spectrum_var: f64 = layers.iter().map(|l| l.spectrum_rms_m.powi(2)).sum();
+        let realization_var: f64 = layers.iter().map(|l| l.realization_rms_m.powi(2)).sum();
+        let s = self.spectrum.as_ref();
+        OceanSummary {
+            seed: self.seed,
+            spectrum: s.map(|s| s.kind),
+            spreading: s.map(|s| s.spreading),
+            alpha: s.map_or(0.0, |s| s.alpha),
+            omega_p_rad_s: s.map_or(0.0, |s| s.omega_p),
+            peak_wavelength_m: s.map_or(0.0, |s| std::f64::consts::TAU / s.peak_wavenumber()),
+            model_rms_m: s.map_or(0.0, |s| s.total_variance().sqrt()),
+            spectrum_rms_m: spectrum_var.sqrt(),
+            realization_rms_m: realization_var.sqrt(),
+            sampled_rms_m: self.stats.sampled_rms_m,
+            mss_spectrum: layers.iter().map(|l| l.mss_spectrum).sum(),
+            mss_grid: layers.iter().map(|l| l.mss_grid).sum(),
+            mss_lookup: self.stats.sampled_mss,
+            hs_m: 4.0 * realization_var.sqrt(),
+            hs_target_m: self.params.rms_target().map(|rms| 4.0 * rms),
+            amplitude_scale: self.amplitude_scale,
+            folded_fraction: self.stats.folded_fraction,
+            seconds: self.seconds,
+            partitions: self.partitions(&layers),
+            layers,
+        }
+    }
+
+    /// Each partition's expected share of the layers' variance (the wind sea first).
+    fn partitions(&self, layers: &[LayerSummary]) -> Vec<PartitionSummary> {
+        let Some(s) = self.spectrum.as_ref() else {
+            return Vec::new();
+        };
+        let k_lo = layers.iter().map(|l| l.k_min).fold(f64::INFINITY, f64::min);
+        let k_hi = layers.iter().map(|l| l.k_max).fold(0.0, f64::max);
+        let parts = std::iter::once(Part::Wind).chain((0..s.swells.len()).map(Part::Swell));
+        let var: Vec<(Part, f64)> = parts
+            .map(|p| {
+                (
+                    p,
+                    s.part_variance(p, k_lo, k_hi, |_| 1.0) * self.amplitude_scale.powi(2),
+                )
+            })
+            .collect();
+        let total: f64 = var.iter().map(|v| v.1).sum();
+        var.into_iter()
+            .map(|(part, v)| {
+                let (name, omega_p, dir) = match part {
+                    Part::Wind => ("wind sea".to_string(), s.omega_p, s.wind_dir_rad),
+                    Part::Swell(i) => {
+                        let w = &s.swells[i];
+                        (format!("swell {}", i + 1), w.omega_p, w.dir_rad)
+                    }
+                };
+                PartitionSummary {
+                    name,
+                    hs_m: 4.0 * v.sqrt(),
+                    variance_share: if total > 0.0 { v / total } else { 0.0 },
+                    peak_period_s: std::f64::consts::TAU / omega_p,
+                    peak_wavelength_m: std::f64::consts::TAU
+                        / crate::ocean::spectrum::wavenumber(omega_p, s.depth_m),
+                    direction_deg: dir.to_degrees(),
+                }
+            })
+            .collect()
+    }
+}
