@@ -157,7 +157,8 @@ pub struct Prepared {
     pub seconds_build: f64,
     /// Embree's version when the Embree backend traces.
     pub embree_version: Option<String>,
-    pub sky: Sky,
+    /// Shared with another prepared scene when [`Setup::sky`] handed it in.
+    pub sky: Arc<Sky>,
     pub skip_slope: Option<f32>,
     pub skip_above_y: Option<f32>,
     /// The sky's downwelling irradiance, which sets the water-leaving radiance.
@@ -182,6 +183,9 @@ pub struct Setup {
     /// of building it again (the comparison's two tessellations share one); one built for
     /// another sea or seed is refused. Such a scene cannot [`Prepared::advance_to`].
     pub ocean: Option<Arc<Surface>>,
+    /// A sky already built for this scene's `[sky]` and camera height, used instead of loading
+    /// it again (the comparison's two tessellations share one).
+    pub sky: Option<Arc<Sky>>,
 }
 
 /// Builds the ocean, the tessellation and the BVH of a validated scene.
@@ -222,6 +226,7 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
         refittable,
         progress,
         ocean: shared_ocean,
+        sky: shared_sky,
     } = setup;
     if let Some(o) = &shared_ocean
         && (o.params() != &cfg.ocean || o.seed() != cfg.render.ocean_seed)
@@ -243,7 +248,10 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
     )?;
     let pool = tracing_pool(cfg.render.threads)?;
     let threads = pool.current_num_threads();
-    let sky = make_sky(cfg)?;
+    let sky = match shared_sky {
+        Some(sky) => sky,
+        None => Arc::new(make_sky(cfg)?),
+    };
     let (ocean, seconds_ocean, mesh, stats, seconds_tessellation) =
         pool.install(|| -> Result<_, RenderError> {
             let t = Instant::now();

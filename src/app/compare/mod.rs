@@ -265,11 +265,12 @@ fn render_scenarios(
     }
     let mut seconds_pilot = t.elapsed().as_secs_f64();
     say(format!("high tessellation ({})", job.high.preset));
-    // the same sea: the low tessellation's ocean, not a second build of it
+    // the same sea and sky: the low tessellation's, not a second build of them
     let high = prepare_with(
         &high_cfg,
         Setup {
             ocean: Some(Arc::clone(&low.ocean)),
+            sky: Some(Arc::clone(&low.sky)),
             progress: job.progress,
             ..Setup::default()
         },
