@@ -215,18 +215,18 @@ fn radiance_inputs_are_finite_non_negative_and_bounded() {
     let dir = tmp("radiance");
     for (toml, field) in [
         (
-            "[sky.analytic]\nkind = \"clear\"\nsun_radiance = 1e40\n",
+            "[sky.analytic]\nkind = \"hand-made-clear\"\nsun_radiance = 1e40\n",
             "sun_radiance",
         ),
         (
-            "[sky.analytic]\nkind = \"clear\"\nsun_radiance = -1.0\n",
+            "[sky.analytic]\nkind = \"hand-made-clear\"\nsun_radiance = -1.0\n",
             "sun_radiance",
         ),
         (
-            "[sky.analytic]\nkind = \"clear\"\nsun_radiance = 1e19\n",
+            "[sky.analytic]\nkind = \"hand-made-clear\"\nsun_radiance = 1e19\n",
             "sun_radiance",
         ),
-        ("[sky]\nscale = 1e30\n", "sun_radiance"),
+        ("[sky]\nscale = 1e30\n", "sky.scale"),
         (
             "[sky.analytic]\nkind = \"uniform\"\nradiance = [1.0, nan, 1.0]\n",
             "radiance",
@@ -239,7 +239,7 @@ fn radiance_inputs_are_finite_non_negative_and_bounded() {
     // The bound itself renders, without a NaN.
     let (code, _, err) = render_toml(
         &dir,
-        "[sky.analytic]\nkind = \"clear\"\nsun_radiance = 1e18\nsun_elevation_deg = 30.0\n",
+        "[sky.analytic]\nkind = \"hand-made-clear\"\nsun_radiance = 1e18\nsun_elevation_deg = 30.0\n",
         &[],
     );
     assert_eq!(code, 0, "{err}");

@@ -130,8 +130,7 @@ fn pinhole(pitch_deg: f64) -> Projection {
 fn clear_sun(elevation_deg: f32) -> AnalyticSky {
     let AnalyticSky::Clear {
         sun_azimuth_deg,
-        sun_radiance,
-        sky_scale,
+        turbidity,
         ..
     } = AnalyticSky::default()
     else {
@@ -140,8 +139,7 @@ fn clear_sun(elevation_deg: f32) -> AnalyticSky {
     AnalyticSky::Clear {
         sun_elevation_deg: elevation_deg,
         sun_azimuth_deg,
-        sun_radiance,
-        sky_scale,
+        turbidity,
     }
 }
 

@@ -358,6 +358,18 @@ impl SkyConfig {
             v.iter()
                 .try_for_each(|&c| check_radiance(field, c as f64 * scale.max(1.0)))
         };
+        let check_sun = |elevation_deg: f32, azimuth_deg: f32| {
+            crate::sky::check_sun_elevation(elevation_deg as f64)
+                .map_err(|m| invalid("sky.analytic.sun_elevation_deg", &m, elevation_deg))?;
+            if !azimuth_deg.is_finite() {
+                return Err(invalid(
+                    "sky.analytic.sun_azimuth_deg",
+                    "finite",
+                    azimuth_deg,
+                ));
+            }
+            Ok(())
+        };
         match self.analytic {
             AnalyticSky::Uniform { radiance } => rgb("sky.analytic.radiance", radiance)?,
             AnalyticSky::Gradient { zenith, horizon } => {
@@ -367,19 +379,33 @@ impl SkyConfig {
             AnalyticSky::Clear {
                 sun_elevation_deg,
                 sun_azimuth_deg,
+                turbidity,
+            } => {
+                check_sun(sun_elevation_deg, sun_azimuth_deg)?;
+                let (lo, hi) = crate::sky::TURBIDITY_RANGE;
+                if !(lo..=hi).contains(&(turbidity as f64)) {
+                    return Err(invalid(
+                        "sky.analytic.turbidity",
+                        &format!("in [{lo}, {hi}], the range the model was fitted on"),
+                        turbidity,
+                    ));
+                }
+                // its brightest radiance is the sun's disc, below the sun outside the air
+                check_radiance(
+                    "sky.scale (times the clear sky's sun)",
+                    crate::sky::procedural::SUN_LUMINANCE_EXTRATERRESTRIAL
+                        / 1e3
+                        / crate::sky::procedural::KCD_PER_UNIT
+                        * scale,
+                )?;
+            }
+            AnalyticSky::HandMadeClear {
+                sun_elevation_deg,
+                sun_azimuth_deg,
                 sun_radiance,
                 sky_scale,
             } => {
-                crate::sky::check_sun_elevation(sun_elevation_deg as f64).map_err(|m| {
-                    invalid("sky.analytic.sun_elevation_deg", &m, sun_elevation_deg)
-                })?;
-                if !sun_azimuth_deg.is_finite() {
-                    return Err(invalid(
-                        "sky.analytic.sun_azimuth_deg",
-                        "finite",
-                        sun_azimuth_deg,
-                    ));
-                }
+                check_sun(sun_elevation_deg, sun_azimuth_deg)?;
                 check_radiance(
                     "sky.analytic.sun_radiance",
                     sun_radiance as f64 * scale.max(1.0),

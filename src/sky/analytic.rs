@@ -1,68 +1,27 @@
 //! The built-in analytic skies: their radiance one ray at a time and in lanes, and their
-//! irradiance.
+//! irradiance. An [`Evaluator`] holds a sky's per-sky constants (the sun's direction, the
+//! Preetham model's coefficients), computed once; [`Sky`](super::Sky) evaluates rays with it.
 
 use glam::Vec3;
 
+use super::procedural::{KCD_PER_UNIT, Preetham};
 use super::{AnalyticSky, SUN_RADIUS_RAD, map_irradiance};
 use crate::equirect;
 use crate::image_io::RgbImage;
 
-/// The analytic sun's colour, scaled by its radiance.
+/// The hand-made sky's sun colour, scaled by its radiance.
 pub(super) const SUN_COLOUR: Vec3 = Vec3::new(1.0, 0.93, 0.82);
 
 impl AnalyticSky {
-    /// Downwelling irradiance on a horizontal surface (see [`Sky::irradiance`]).
-    pub fn irradiance(&self) -> Vec3 {
-        let AnalyticSky::Clear {
-            sun_elevation_deg,
-            sun_azimuth_deg,
-            sun_radiance,
-            sky_scale,
-        } = *self
-        else {
-            return map_irradiance(&rasterize(self, 1024));
-        };
-        let without_sun = AnalyticSky::Clear {
-            sun_elevation_deg,
-            sun_azimuth_deg,
-            sun_radiance: 0.0,
-            sky_scale,
-        };
-        // The disc: sin(elevation) over a 64 x 64 grid across it, points below the horizon
-        // left out.
-        let (el, az) = (sun_elevation_deg.to_radians(), sun_azimuth_deg.to_radians());
-        let sun = equirect::direction(el, az);
-        let (u, v) = (
-            Vec3::new(-az.sin(), 0.0, az.cos()),
-            equirect::direction(el + std::f32::consts::FRAC_PI_2, az),
-        );
-        const K: usize = 64;
-        let mut cos_sum = 0.0f64;
-        let mut inside = 0usize;
-        for i in 0..K {
-            for j in 0..K {
-                let (a, b) = (
-                    (2.0 * (i as f32 + 0.5) / K as f32 - 1.0),
-                    (2.0 * (j as f32 + 0.5) / K as f32 - 1.0),
-                );
-                if a * a + b * b > 1.0 {
-                    continue;
-                }
-                inside += 1;
-                let d = (sun + SUN_RADIUS_RAD * (a * u + b * v)).normalize();
-                cos_sum += d.y.max(0.0) as f64;
-            }
-        }
-        let solid_angle = std::f64::consts::TAU * (1.0 - (SUN_RADIUS_RAD as f64).cos());
-        let disc = (solid_angle * cos_sum / inside.max(1) as f64) as f32;
-        map_irradiance(&rasterize(&without_sun, 1024))
-            + Vec3::splat(sun_radiance) * SUN_COLOUR * disc
-    }
-
     /// Direction towards the sun (+y up); `Vec3::Y` for the skies without one.
     pub fn sun_direction(&self) -> Vec3 {
         match *self {
             AnalyticSky::Clear {
+                sun_elevation_deg,
+                sun_azimuth_deg,
+                ..
+            }
+            | AnalyticSky::HandMadeClear {
                 sun_elevation_deg,
                 sun_azimuth_deg,
                 ..
@@ -71,73 +30,249 @@ impl AnalyticSky {
         }
     }
 
-    /// Radiance arriving from direction `d`.
+    /// Radiance arriving from direction `d` (unit length). Prepares the sky on every call: for
+    /// many rays, make one [`Evaluator`].
     pub fn radiance(&self, d: Vec3) -> Vec3 {
-        self.radiance_with_sun(d, self.sun_direction())
+        Evaluator::new(self).radiance(d)
     }
 
-    /// [`Self::radiance`] with the sun's direction computed once ([`Self::sun_direction`]):
-    /// its two sine-cosine pairs were a tenth of a clear sky's cost per ray.
-    #[inline]
-    pub fn radiance_with_sun(&self, d: Vec3, sun: Vec3) -> Vec3 {
-        match *self {
-            AnalyticSky::Uniform { radiance } => Vec3::from(radiance),
-            AnalyticSky::Gradient { zenith, horizon } => {
-                let s = d.y.clamp(0.0, 1.0);
-                Vec3::from(horizon).lerp(Vec3::from(zenith), s)
-            }
+    /// Downwelling irradiance on a horizontal surface (see [`Sky::irradiance`](super::Sky::irradiance)).
+    pub fn irradiance(&self) -> Vec3 {
+        Evaluator::new(self).irradiance()
+    }
+}
+
+/// An analytic sky ready to be evaluated: what depends only on the sky computed once.
+#[derive(Clone, Copy, Debug)]
+pub enum Evaluator {
+    Uniform([f32; 3]),
+    Gradient { zenith: [f32; 3], horizon: [f32; 3] },
+    Clear(ClearLanes),
+    HandMade(HandMadeLanes),
+}
+
+impl Evaluator {
+    pub fn new(sky: &AnalyticSky) -> Evaluator {
+        match *sky {
+            AnalyticSky::Uniform { radiance } => Evaluator::Uniform(radiance),
+            AnalyticSky::Gradient { zenith, horizon } => Evaluator::Gradient { zenith, horizon },
             AnalyticSky::Clear {
+                sun_elevation_deg,
+                sun_azimuth_deg,
+                turbidity,
+            } => Evaluator::Clear(ClearLanes::new(&Preetham::new(
+                sun_elevation_deg as f64,
+                sun_azimuth_deg as f64,
+                turbidity as f64,
+            ))),
+            AnalyticSky::HandMadeClear {
                 sun_radiance,
                 sky_scale,
                 ..
-            } => Vec3::from(clear_lane(
-                d.to_array(),
-                sun.to_array(),
+            } => Evaluator::HandMade(HandMadeLanes {
+                sun: sky.sun_direction().to_array(),
                 sun_radiance,
                 sky_scale,
-            )),
+            }),
+        }
+    }
+
+    /// Radiance arriving from unit direction `d`: the same bits as a lane of a batch.
+    #[inline]
+    pub fn radiance(&self, d: Vec3) -> Vec3 {
+        match self {
+            Evaluator::Uniform(radiance) => Vec3::from(*radiance),
+            Evaluator::Gradient { zenith, horizon } => {
+                let s = d.y.clamp(0.0, 1.0);
+                Vec3::from(*horizon).lerp(Vec3::from(*zenith), s)
+            }
+            Evaluator::Clear(c) => Vec3::from(c.lane(d.to_array())),
+            Evaluator::HandMade(h) => Vec3::from(h.lane(d.to_array())),
+        }
+    }
+
+    /// The sun's direction and its disc's radiance, for the skies with a sun.
+    fn disc(&self) -> Option<(Vec3, Vec3)> {
+        match self {
+            Evaluator::Clear(c) => Some((Vec3::from(c.sun), Vec3::from(c.sun_rgb))),
+            Evaluator::HandMade(h) => Some((Vec3::from(h.sun), h.sun_radiance * SUN_COLOUR)),
+            _ => None,
+        }
+    }
+
+    /// The same sky without its sun's disc.
+    fn without_disc(&self) -> Evaluator {
+        let mut e = *self;
+        match &mut e {
+            Evaluator::Clear(c) => c.sun_rgb = [0.0; 3],
+            Evaluator::HandMade(h) => h.sun_radiance = 0.0,
+            _ => {}
+        }
+        e
+    }
+
+    /// Downwelling irradiance on a horizontal surface: the sky without the disc sampled on a
+    /// 1024 x 512 map (exact for the smooth part to the map's resolution), plus the disc, 1.5
+    /// texels across there, integrated on its own.
+    pub fn irradiance(&self) -> Vec3 {
+        let smooth = map_irradiance(&rasterize_with(&self.without_disc(), 1024));
+        match self.disc() {
+            Some((sun, rgb)) => smooth + rgb * disc_cosine_solid_angle(sun),
+            None => smooth,
         }
     }
 }
 
-/// The clear sky's radiance along unit direction `d` with the sun towards `sun`: one lane of a
-/// batch. [`AnalyticSky::radiance_with_sun`] and [`Sky::radiance_many`] both evaluate it, so a
-/// direction gets the same bits alone as in a batch; it is branch-free, its acos and exp
-/// inline, so a loop over lanes vectorises (libm's `acosf` and `expf` calls and the branch at
-/// the sun's disc made the sky a quarter of the default render's trace, latency-bound).
-#[inline(always)]
-pub(super) fn clear_lane(
+/// The sun disc's solid angle weighted by the cosine to the zenith: sin(elevation) over a
+/// 64 x 64 grid across it, points below the horizon left out.
+fn disc_cosine_solid_angle(sun: Vec3) -> f32 {
+    let u = Vec3::Y.cross(sun).try_normalize().unwrap_or(Vec3::X);
+    let v = sun.cross(u);
+    const K: usize = 64;
+    let mut cos_sum = 0.0f64;
+    let mut inside = 0usize;
+    for i in 0..K {
+        for j in 0..K {
+            let (a, b) = (
+                (2.0 * (i as f32 + 0.5) / K as f32 - 1.0),
+                (2.0 * (j as f32 + 0.5) / K as f32 - 1.0),
+            );
+            if a * a + b * b > 1.0 {
+                continue;
+            }
+            inside += 1;
+            let d = (sun + SUN_RADIUS_RAD * (a * u + b * v)).normalize();
+            cos_sum += d.y.max(0.0) as f64;
+        }
+    }
+    let solid_angle = std::f64::consts::TAU * (1.0 - (SUN_RADIUS_RAD as f64).cos());
+    (solid_angle * cos_sum / inside.max(1) as f64) as f32
+}
+
+/// The Preetham clear sky's constants in f32, for [`ClearLanes::lane`].
+#[derive(Clone, Copy, Debug)]
+pub struct ClearLanes {
+    sun: [f32; 3],
+    /// Perez et al.'s coefficients A..E, each for luminance Y and chromaticities x and y.
+    a: [f32; 3],
+    b: [f32; 3],
+    c: [f32; 3],
     d: [f32; 3],
+    e: [f32; 3],
+    /// Zenith luminance (map units), x and y, each over the Perez function at the zenith.
+    zenith: [f32; 3],
+    /// The sun disc's linear sRGB, map units.
+    sun_rgb: [f32; 3],
+}
+
+impl ClearLanes {
+    pub fn new(p: &Preetham) -> ClearLanes {
+        let (coeffs, zenith) = (p.perez_coefficients(), p.scaled_zenith());
+        let col = |i: usize| std::array::from_fn(|k| coeffs[k][i] as f32);
+        let (b, d): ([f32; 3], [f32; 3]) = (col(1), col(3));
+        // exp's arguments B / cos(theta) and D gamma stay <= 0 (its domain) for the model's
+        // turbidities, 1.7..=10: B and D are negative there.
+        debug_assert!(b.iter().chain(&d).all(|&v| v < 0.0), "{b:?} {d:?}");
+        ClearLanes {
+            sun: p.sun().as_vec3().to_array(),
+            a: col(0),
+            b,
+            c: col(2),
+            d,
+            e: col(4),
+            zenith: [
+                (zenith[0] / KCD_PER_UNIT) as f32,
+                zenith[1] as f32,
+                zenith[2] as f32,
+            ],
+            sun_rgb: p.sun_rgb().as_vec3().to_array(),
+        }
+    }
+
+    /// The radiance along unit direction `d`: one lane of a batch, branch-free, what
+    /// [`Preetham::sky`] gives in f64 (within 1e-4 relative, test) and the sun's disc inside
+    /// its radius. Below the horizon it is the horizon's sky at that azimuth, as in the model
+    /// `sky generate` renders.
+    #[inline(always)]
+    pub(super) fn lane(&self, d: [f32; 3]) -> [f32; 3] {
+        let below = d[1] < 0.0;
+        let across = 1.0 / (d[0] * d[0] + d[2] * d[2]).sqrt().max(1e-20);
+        let s = if below { across } else { 1.0 };
+        let (x, y, z) = (d[0] * s, d[1].max(0.0), d[2] * s);
+        let sun = self.sun;
+        let cos_g = (x * sun[0] + y * sun[1] + z * sun[2]).clamp(-1.0, 1.0);
+        let gamma = acos(cos_g);
+        let over_cos_theta = 1.0 / y.max(1e-4);
+        // Perez: F = (1 + A e^(B / cos theta)) (1 + C e^(D gamma) + E cos^2 gamma), written
+        // out per channel: as an array's from_fn the closure was not inlined (5x the cost).
+        let (a, b, c, dd, e) = (self.a, self.b, self.c, self.d, self.e);
+        let cos2 = cos_g * cos_g;
+        let perez = |k: usize| {
+            (1.0 + a[k] * exp(b[k] * over_cos_theta))
+                * (1.0 + c[k] * exp(dd[k] * gamma) + e[k] * cos2)
+        };
+        let (f0, f1, f2) = (perez(0), perez(1), perez(2));
+        let lum = (self.zenith[0] * f0).max(0.0);
+        let (cx, cy) = (self.zenith[1] * f1, self.zenith[2] * f2);
+        // xyY -> XYZ -> linear sRGB (D65)
+        let per_y = lum / cy;
+        let (big_x, big_z) = (cx * per_y, (1.0 - cx - cy) * per_y);
+        let r = 3.2406 * big_x - 1.5372 * lum - 0.4986 * big_z;
+        let g = -0.9689 * big_x + 1.8758 * lum + 0.0415 * big_z;
+        let bl = 0.0557 * big_x - 0.2040 * lum + 1.0570 * big_z;
+        let in_disc = !below && gamma < SUN_RADIUS_RAD;
+        let sun_rgb = self.sun_rgb;
+        [
+            if in_disc { sun_rgb[0] } else { r.max(0.0) },
+            if in_disc { sun_rgb[1] } else { g.max(0.0) },
+            if in_disc { sun_rgb[2] } else { bl.max(0.0) },
+        ]
+    }
+}
+
+/// The hand-made clear sky's constants.
+#[derive(Clone, Copy, Debug)]
+pub struct HandMadeLanes {
     sun: [f32; 3],
     sun_radiance: f32,
     sky_scale: f32,
-) -> [f32; 3] {
-    const ZENITH: [f32; 3] = [0.25, 0.45, 0.95];
-    const HORIZON: [f32; 3] = [0.95, 0.9, 0.85];
-    const GLOW: [f32; 3] = [1.0, 0.75, 0.45];
-    let cos_g = (d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2]).clamp(-1.0, 1.0);
-    let gamma = acos(cos_g);
-    let up = d[1].max(0.0);
-    let s = 1.0 - exp(-up * (1.0 / 0.12));
-    // Forward-scattering glow around the sun, stronger for a low sun.
-    // exp(-gamma / 0.12) is the fifth power of exp(-gamma / 0.6): one exp, not two.
-    let e = exp(-gamma * (1.0 / 0.6));
-    let e2 = e * e;
-    // Light low in the sky drops towards the horizon below a low sun (reddened).
-    let glow = (3.0 * (e2 * e2 * e) + 0.6 * e) * (1.0 - 0.7 * sun[1].max(0.0));
-    let in_disc = gamma < SUN_RADIUS_RAD;
-    std::array::from_fn(|k| {
-        let sky = sky_scale * ((HORIZON[k] + (ZENITH[k] - HORIZON[k]) * s) + GLOW[k] * glow);
-        if in_disc {
-            sun_radiance * SUN_COLOUR.to_array()[k]
-        } else {
-            sky
-        }
-    })
+}
+
+impl HandMadeLanes {
+    /// The hand-made clear sky's radiance along unit direction `d`: one lane of a batch,
+    /// branch-free, its acos and exp inline, so a loop over lanes vectorises (libm's `acosf` and
+    /// `expf` calls and the branch at the sun's disc made the sky a quarter of the default
+    /// render's trace, latency-bound).
+    #[inline(always)]
+    pub(super) fn lane(&self, d: [f32; 3]) -> [f32; 3] {
+        const ZENITH: [f32; 3] = [0.25, 0.45, 0.95];
+        const HORIZON: [f32; 3] = [0.95, 0.9, 0.85];
+        const GLOW: [f32; 3] = [1.0, 0.75, 0.45];
+        let (sun, sun_radiance, sky_scale) = (self.sun, self.sun_radiance, self.sky_scale);
+        let cos_g = (d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2]).clamp(-1.0, 1.0);
+        let gamma = acos(cos_g);
+        let up = d[1].max(0.0);
+        let s = 1.0 - exp(-up * (1.0 / 0.12));
+        // Forward-scattering glow around the sun, stronger for a low sun.
+        // exp(-gamma / 0.12) is the fifth power of exp(-gamma / 0.6): one exp, not two.
+        let e = exp(-gamma * (1.0 / 0.6));
+        let e2 = e * e;
+        // Light low in the sky drops towards the horizon below a low sun (reddened).
+        let glow = (3.0 * (e2 * e2 * e) + 0.6 * e) * (1.0 - 0.7 * sun[1].max(0.0));
+        let in_disc = gamma < SUN_RADIUS_RAD;
+        std::array::from_fn(|k| {
+            let sky = sky_scale * ((HORIZON[k] + (ZENITH[k] - HORIZON[k]) * s) + GLOW[k] * glow);
+            if in_disc {
+                sun_radiance * SUN_COLOUR.to_array()[k]
+            } else {
+                sky
+            }
+        })
+    }
 }
 
 /// acos(x) for x in [-1, 1], within 3e-7 rad of the true angle (an f32 ulp is 2.4e-7 near
-/// pi), branch-free for [`clear_lane`]: Cephes' `acosf` (S. L. Moshier), pi/2 - asin(x) in the
+/// pi), branch-free for the lanes: Cephes' `acosf` (S. L. Moshier), pi/2 - asin(x) in the
 /// middle, 2 asin(sqrt((1 - x) / 2)) towards 1 and pi minus that of -x towards -1, asin an odd
 /// polynomial of degree 11 on [0, 1/2].
 #[inline(always)]
@@ -161,7 +296,7 @@ pub(super) fn acos(x: f32) -> f32 {
 
 /// e^x for x in [-87, 0] (the clear sky's arguments; clamped to it), within 2 ulp: Cephes'
 /// `expf` (S. L. Moshier), x = n ln 2 + r with |r| <= ln 2 / 2, a polynomial of degree 7 in r,
-/// and 2^n from its exponent bits; branch-free for [`clear_lane`].
+/// and 2^n from its exponent bits; branch-free for the lanes.
 #[inline(always)]
 pub(super) fn exp(x: f32) -> f32 {
     let x = x.clamp(-87.0, 0.0);
@@ -181,6 +316,10 @@ pub(super) fn exp(x: f32) -> f32 {
 
 /// Samples an analytic sky at the texel centres of a `width` x `width / 2` equirectangular map.
 pub fn rasterize(sky: &AnalyticSky, width: usize) -> RgbImage {
+    rasterize_with(&Evaluator::new(sky), width)
+}
+
+fn rasterize_with(sky: &Evaluator, width: usize) -> RgbImage {
     let mut img = RgbImage::new(width, width / 2);
     let (w, h) = (width as f32, img.height as f32);
     for y in 0..img.height {

@@ -16,8 +16,8 @@ use glam::Vec3;
 
 pub use crate::config::AnalyticSky;
 use crate::image_io::{ImageError, RgbImage, read_exr};
-use analytic::clear_lane;
 pub use analytic::rasterize;
+pub use analytic::{ClearLanes, Evaluator, HandMadeLanes};
 use map::{Taps, read_taps, taps};
 pub use map::{lookup, map_irradiance, validate_map};
 
@@ -40,6 +40,11 @@ pub fn check_sun_elevation(deg: f64) -> Result<(), String> {
         ))
     }
 }
+
+/// The atmospheric turbidities the Preetham clear sky accepts: the range its coefficients were
+/// fitted on (Preetham et al. 1999, about 2 to 10).
+pub const TURBIDITY_RANGE: (f64, f64) = (1.7, 10.0);
+
 /// Rays [`Sky::radiance_many`] evaluates side by side.
 pub const SKY_LANES: usize = 16;
 
@@ -48,8 +53,8 @@ pub const SKY_LANES: usize = 16;
 pub enum SkySource {
     Analytic {
         model: AnalyticSky,
-        /// `model.sun_direction()`, computed once.
-        sun: Vec3,
+        /// The model's constants, computed once.
+        eval: Evaluator,
     },
     Map(RgbImage),
 }
@@ -71,7 +76,7 @@ impl Sky {
         Sky {
             source: SkySource::Analytic {
                 model: sky,
-                sun: sky.sun_direction(),
+                eval: Evaluator::new(&sky),
             },
             dome_altitude_m: None,
             earth_radius_m: 6_371_000.0,
@@ -95,9 +100,7 @@ impl Sky {
     pub fn radiance(&self, org: Vec3, dir: Vec3) -> Vec3 {
         self.scale
             * match &self.source {
-                SkySource::Analytic { model, sun } => {
-                    model.radiance_with_sun(self.unit_direction(org, dir), *sun)
-                }
+                SkySource::Analytic { eval, .. } => eval.radiance(self.unit_direction(org, dir)),
                 SkySource::Map(img) => lookup(img, self.direction(org, dir)),
             }
     }
@@ -112,19 +115,19 @@ impl Sky {
         // What the lanes evaluate; the other analytic skies are cheap one by one.
         enum Lanes<'a> {
             Map(&'a RgbImage),
-            Clear([f32; 3], f32, f32),
+            Clear(&'a ClearLanes),
+            HandMade(&'a HandMadeLanes),
         }
         let lanes = match &self.source {
             SkySource::Map(img) => Lanes::Map(img),
             SkySource::Analytic {
-                model:
-                    AnalyticSky::Clear {
-                        sun_radiance,
-                        sky_scale,
-                        ..
-                    },
-                sun,
-            } => Lanes::Clear(sun.to_array(), *sun_radiance, *sky_scale),
+                eval: Evaluator::Clear(c),
+                ..
+            } => Lanes::Clear(c),
+            SkySource::Analytic {
+                eval: Evaluator::HandMade(h),
+                ..
+            } => Lanes::HandMade(h),
             SkySource::Analytic { .. } => {
                 for ((o, d), l) in orgs.iter().zip(dirs).zip(out.iter_mut()) {
                     *l = self.radiance(*o, *d);
@@ -154,12 +157,20 @@ impl Sky {
                         *l = read_taps(img, t);
                     }
                 }
-                Lanes::Clear(sun, sun_radiance, sky_scale) => {
+                Lanes::Clear(c) => {
                     for (i, (o, d)) in o.iter().zip(d).enumerate() {
                         [x[i], y[i], z[i]] = self.unit_direction(*o, *d).to_array();
                     }
                     for i in 0..SKY_LANES {
-                        l[i] = clear_lane([x[i], y[i], z[i]], sun, sun_radiance, sky_scale);
+                        l[i] = c.lane([x[i], y[i], z[i]]);
+                    }
+                }
+                Lanes::HandMade(h) => {
+                    for (i, (o, d)) in o.iter().zip(d).enumerate() {
+                        [x[i], y[i], z[i]] = self.unit_direction(*o, *d).to_array();
+                    }
+                    for i in 0..SKY_LANES {
+                        l[i] = h.lane([x[i], y[i], z[i]]);
                     }
                 }
             }
@@ -205,7 +216,7 @@ impl Sky {
         self.scale
             * match &self.source {
                 SkySource::Map(m) => map_irradiance(m),
-                SkySource::Analytic { model, .. } => model.irradiance(),
+                SkySource::Analytic { eval, .. } => eval.irradiance(),
             }
     }
 

@@ -94,10 +94,14 @@ impl SkyParams {
             );
         }
         // Preetham et al. fitted their coefficients for turbidities of about 2 to 10.
-        if !(1.7..=10.0).contains(&self.turbidity) {
+        let (lo, hi) = super::TURBIDITY_RANGE;
+        if !(lo..=hi).contains(&self.turbidity) {
             return bad(
                 "turbidity",
-                format!("{} is outside the model's range 1.7..=10", self.turbidity),
+                format!(
+                    "{} is outside the model's range {lo}..={hi}",
+                    self.turbidity
+                ),
             );
         }
         if !(0.0..=1.0).contains(&self.cloud_cover) {
@@ -198,6 +202,17 @@ impl Preetham {
 
     pub fn sun(&self) -> DVec3 {
         self.sun
+    }
+
+    /// Perez et al.'s coefficients A..E for luminance Y and chromaticities x and y.
+    pub fn perez_coefficients(&self) -> [[f64; 5]; 3] {
+        self.coeffs
+    }
+
+    /// Zenith luminance Y (kcd/m^2) and chromaticities x and y, each divided by the Perez
+    /// function at the zenith.
+    pub fn scaled_zenith(&self) -> [f64; 3] {
+        self.scaled_zenith
     }
 
     /// Linear sRGB of the sun's disc, map units.

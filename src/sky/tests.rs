@@ -28,12 +28,23 @@ fn inline_acos_and_exp_agree_with_libm() {
 
 #[test]
 fn sky_lookups_in_batches_equal_single_lookups() {
-    let model = AnalyticSky::Clear {
+    let physical = AnalyticSky::Clear {
+        sun_elevation_deg: 3.0,
+        sun_azimuth_deg: 40.0,
+        turbidity: 2.5,
+    };
+    let hand_made = AnalyticSky::HandMadeClear {
         sun_elevation_deg: 3.0,
         sun_azimuth_deg: 40.0,
         sun_radiance: 5e4,
         sky_scale: 1.0,
     };
+    for model in [physical, hand_made] {
+        batches_equal_single_lookups(model);
+    }
+}
+
+fn batches_equal_single_lookups(model: AnalyticSky) {
     let mut sky = Sky::analytic(model);
     sky.dome_altitude_m = Some(200_000.0);
     let sun = sky_sun(&sky);
@@ -51,12 +62,13 @@ fn sky_lookups_in_batches_equal_single_lookups() {
                     rng.range(-5e3, 5e3),
                 )
             };
+            // (and some below the horizon, which the physical sky continues)
             let d = if i % 4 == 0 {
                 sun + 1e-3 * Vec3::new(rng.range(-1.0, 1.0), 0.0, rng.range(-1.0, 1.0))
             } else {
                 Vec3::new(
                     rng.range(-1.0, 1.0),
-                    rng.range(0.0, 1.0),
+                    rng.range(-0.2, 1.0),
                     rng.range(-1.0, 1.0),
                 )
             };
@@ -77,6 +89,7 @@ fn sky_lookups_in_batches_equal_single_lookups() {
                 alone.to_array().map(f32::to_bits),
                 l.to_array().map(f32::to_bits)
             );
+            assert!(alone.is_finite() && alone.min_element() >= 0.0, "{alone}");
             bright += usize::from(alone.x > 1e2);
         }
         // (the analytic sun's disc is met; the map's texels are wider than it)
@@ -92,8 +105,8 @@ fn sky_lookups_in_batches_equal_single_lookups() {
 }
 
 fn sky_sun(sky: &Sky) -> Vec3 {
-    match sky.source {
-        SkySource::Analytic { sun, .. } => sun,
+    match &sky.source {
+        SkySource::Analytic { model, .. } => model.sun_direction(),
         SkySource::Map(_) => unreachable!(),
     }
 }
@@ -179,35 +192,99 @@ fn map_lookup_wraps_at_the_seam() {
 
 #[test]
 fn clear_sky_sun_disc_has_the_right_size() {
-    let s = AnalyticSky::default();
-    let AnalyticSky::Clear {
-        sun_elevation_deg,
-        sun_azimuth_deg,
-        sun_radiance,
-        ..
-    } = s
-    else {
-        unreachable!()
+    let hand_made = AnalyticSky::HandMadeClear {
+        sun_elevation_deg: 4.0,
+        sun_azimuth_deg: 180.0,
+        sun_radiance: 2000.0,
+        sky_scale: 1.0,
     };
-    let (el, az) = (sun_elevation_deg.to_radians(), sun_azimuth_deg.to_radians());
-    // step away from the sun centre in elevation
-    let at = |off: f32| {
-        s.radiance(Vec3::new(
-            (el + off).cos() * az.cos(),
-            (el + off).sin(),
-            (el + off).cos() * az.sin(),
-        ))
-        .x
-    };
-    assert!(at(0.0) >= 0.99 * sun_radiance);
-    assert!(at(0.9 * SUN_RADIUS_RAD) >= 0.99 * sun_radiance);
-    assert!(at(1.1 * SUN_RADIUS_RAD) < 0.01 * sun_radiance);
-    // 0.53 degrees across: the disc ends at the same angle on the other side
-    assert!(
-        at(-0.9 * SUN_RADIUS_RAD) >= 0.99 * sun_radiance
-            && at(-1.1 * SUN_RADIUS_RAD) < 0.01 * sun_radiance
-    );
+    for s in [AnalyticSky::default(), hand_made] {
+        let sun = s.sun_direction();
+        let disc = s.radiance(sun).x;
+        let (el, az) = (sun.y.asin(), sun.z.atan2(sun.x));
+        // step away from the sun centre in elevation
+        let at = |off: f32| {
+            s.radiance(Vec3::new(
+                (el + off).cos() * az.cos(),
+                (el + off).sin(),
+                (el + off).cos() * az.sin(),
+            ))
+            .x
+        };
+        assert!(disc > 1e3 * s.radiance(Vec3::Y).x, "{disc}");
+        assert!(at(0.9 * SUN_RADIUS_RAD) >= 0.99 * disc);
+        assert!(at(1.1 * SUN_RADIUS_RAD) < 0.01 * disc);
+        // 0.53 degrees across: the disc ends at the same angle on the other side
+        assert!(
+            at(-0.9 * SUN_RADIUS_RAD) >= 0.99 * disc && at(-1.1 * SUN_RADIUS_RAD) < 0.01 * disc
+        );
+    }
     assert!((2.0 * SUN_RADIUS_RAD.to_degrees() - 0.53).abs() < 0.001);
+}
+
+/// The built-in clear sky, evaluated per ray in f32 lanes, is the model `sky generate` renders
+/// in f64: the Preetham sky within 1e-4 of its value (each channel relative to the brightest,
+/// or to 1 % of the zenith's where that is larger), the sun disc's radiance that model's atmosphere transmits, and below the
+/// horizon the horizon's sky at that azimuth.
+#[test]
+fn the_built_in_clear_sky_is_the_preetham_model() {
+    use crate::sky::procedural::{SkyKind, SkyModel, SkyParams};
+    let mut rng = crate::rng::Rng::keyed(&[37]);
+    for (el, t) in [
+        (3.0, 2.5),
+        (-5.0, 2.0),
+        (0.5, 6.0),
+        (20.0, 1.7),
+        (60.0, 10.0),
+    ] {
+        let az = rng.range(0.0, 360.0);
+        let built_in = AnalyticSky::Clear {
+            sun_elevation_deg: el,
+            sun_azimuth_deg: az,
+            turbidity: t,
+        };
+        let eval = Evaluator::new(&built_in);
+        let model = SkyModel::new(&SkyParams {
+            kind: SkyKind::Clear,
+            sun_elevation_deg: el as f64,
+            sun_azimuth_deg: az as f64,
+            turbidity: t as f64,
+            ..SkyParams::default()
+        })
+        .unwrap();
+        let zenith = model.radiance(DVec3::Y).y;
+        let mut worst = 0f64;
+        for i in 0..20_000 {
+            let d = if i % 5 == 0 {
+                // near the sun, where the aureole is steepest
+                (model.sun().as_vec3()
+                    + 0.05
+                        * Vec3::new(
+                            rng.range(-1.0, 1.0),
+                            rng.range(-1.0, 1.0),
+                            rng.range(-1.0, 1.0),
+                        ))
+                .normalize()
+            } else {
+                Vec3::new(
+                    rng.range(-1.0, 1.0),
+                    rng.range(-0.3, 1.0),
+                    rng.range(-1.0, 1.0),
+                )
+                .normalize()
+            };
+            let (got, want) = (eval.radiance(d).as_dvec3(), model.radiance(d.as_dvec3()));
+            // The disc's rim is where f32 and f64 may disagree about one ray.
+            let gamma = d.as_dvec3().angle_between(model.sun());
+            if (gamma - SUN_RADIUS_RAD as f64).abs() < 1e-5 {
+                continue;
+            }
+            let err = (got - want).abs().max_element() / want.max_element().max(0.01 * zenith);
+            assert!(err < 1e-4, "sun {el} T {t} d {d}: {got} vs {want}");
+            worst = worst.max(err);
+        }
+        assert!(worst > 0.0, "the lanes are not the f64 model itself");
+    }
 }
 
 #[test]
@@ -232,7 +309,7 @@ fn irradiance_of_a_uniform_sky_is_pi_times_its_radiance() {
 
 #[test]
 fn the_sun_disc_adds_its_exact_irradiance() {
-    let sun = |el: f32| AnalyticSky::Clear {
+    let sun = |el: f32| AnalyticSky::HandMadeClear {
         sun_elevation_deg: el,
         sun_azimuth_deg: 70.0,
         sun_radiance: 1000.0,
@@ -252,6 +329,21 @@ fn the_sun_disc_adds_its_exact_irradiance() {
     let low = sun(0.1).irradiance().x;
     let full = 1000.0 * omega * 0.1f32.to_radians().sin();
     assert!(low > 0.0 && low < 1.5 * full, "{low} vs {full}");
+    // The physical sky's disc adds its transmitted radiance the same way: its irradiance
+    // with the sun high is the sky's plus the disc's.
+    let clear = AnalyticSky::Clear {
+        sun_elevation_deg: 30.0,
+        sun_azimuth_deg: 70.0,
+        turbidity: 2.5,
+    };
+    let e = clear.irradiance();
+    let disc = clear.radiance(clear.sun_direction()) * omega * 0.5;
+    // the sun carries most of a clear day's light at 30 degrees
+    let share = disc.y / e.y;
+    assert!(share > 0.5 && share < 0.95, "{share}");
+    // and the whole is what a fine map of the sky holds (its disc some 6 texels across)
+    let fine = map_irradiance(&rasterize(&clear, 4096));
+    assert!(((e - fine) / e).abs().max_element() < 0.05, "{e} vs {fine}");
 }
 
 #[test]

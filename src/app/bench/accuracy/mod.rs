@@ -87,12 +87,12 @@ pub struct AccuracyJob {
 
 impl AccuracyJob {
     /// The scene the benchmark measures unless told otherwise: the default scene's ocean and
-    /// camera under the built-in clear sky with the sun 4 degrees up, its radiance clipped to
-    /// 100 as a photographic sky map clips it (with the physical sun, 2000, the errors of every
+    /// camera under the hand-made clear sky with the sun 4 degrees up, its radiance clipped to
+    /// 100 as a photographic sky map clips it (with a sun of 2000, the errors of every
     /// configuration are those of its noise at the sun's glitter; `--config` measures any scene).
     pub fn default_scene() -> SceneConfig {
         let mut s = SceneConfig::default();
-        s.sky.analytic = crate::config::AnalyticSky::Clear {
+        s.sky.analytic = crate::config::AnalyticSky::HandMadeClear {
             sun_elevation_deg: 4.0,
             sun_azimuth_deg: 180.0,
             sun_radiance: 100.0,
