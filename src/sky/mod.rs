@@ -161,9 +161,7 @@ impl Sky {
                     for (i, (o, d)) in o.iter().zip(d).enumerate() {
                         [x[i], y[i], z[i]] = self.unit_direction(*o, *d).to_array();
                     }
-                    for i in 0..SKY_LANES {
-                        l[i] = c.lane([x[i], y[i], z[i]]);
-                    }
+                    c.lanes(&x, &y, &z, &mut l);
                 }
                 Lanes::HandMade(h) => {
                     for (i, (o, d)) in o.iter().zip(d).enumerate() {
