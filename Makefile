@@ -26,9 +26,10 @@ build: setup
 	$(CARGO) build --release
 
 # The default scene: camera 2 m above the sea, full 360 degrees, paper-low tessellation with
-# normal mapping, the shipped clear sky with the sun 3 degrees up. Prints where the PNG is.
+# normal mapping, the built-in clear sky (Preetham's model) with the sun 3 degrees up. Prints
+# where the PNG is.
 run: build
-	./target/release/vastocean render --sky skies/clear-sun03.exr --out $(OUT)/default
+	./target/release/vastocean render --out $(OUT)/default
 
 # The suite with Embree, then again on the pure-Rust backend alone; the benches are compiled
 # (they must not rot) but not run: timing is `make bench`'s job.
