@@ -152,7 +152,7 @@ impl Sampler<'_> {
     /// normals are independent (what normal mapping needs for a batch of hits).
     pub fn normals(&self, uv: &[[f32; 2]], out: &mut [[f32; 3]]) {
         assert_eq!(uv.len(), out.len(), "one normal per point");
-        if self.interp != Interp::Bilinear {
+        if self.interp == Interp::Bicubic {
             for (n, &[u, v]) in out.iter_mut().zip(uv) {
                 *n = self.normal(u, v);
             }
@@ -174,7 +174,7 @@ impl Sampler<'_> {
         }
     }
 
-    /// [`Sampler::normals`] of up to `LANES` points, bilinear.
+    /// [`Sampler::normals`] of up to `LANES` points, bilinear or variance-preserving.
     #[inline]
     fn normals_in_lanes<const LANES: usize>(&self, uv: &[[f32; 2]], out: &mut [[f32; 3]]) {
         let count = uv.len();
@@ -183,11 +183,12 @@ impl Sampler<'_> {
             (u[l], v[l]) = (p[0], p[1]);
         }
         let mut sum = [[0.0f32; FIELD_COUNT]; LANES];
+        let preserve = self.interp == Interp::VariancePreserving;
         for (layer, o) in self.layers.iter().zip(&self.origin) {
             let inv = layer.inv_dx();
             let px = std::array::from_fn(|l| o[0] + u[l] as f64 * inv);
             let pz = std::array::from_fn(|l| o[1] + v[l] as f64 * inv);
-            layer.add_bilinear_lanes(&px, &pz, count, &mut sum);
+            layer.add_bilinear_lanes(&px, &pz, count, preserve, &mut sum);
         }
         for (n, s) in out.iter_mut().zip(&sum) {
             *n = normal_from_slopes(slopes(s)).0;

@@ -43,7 +43,11 @@ fn normals_in_lanes_are_the_normals_one_at_a_time() {
     let far_x = [[1.0e15, 2.0], [-3.0, 4.0], [7.5, 0.25]];
     let far_z = [[-3.0, 4.0], [5.0, -1.0e15]];
     let nan = [[0.5, 1.0], [f32::NAN, 1.0]];
-    for interp in [Interp::Bilinear, Interp::Bicubic] {
+    for interp in [
+        Interp::Bilinear,
+        Interp::Bicubic,
+        Interp::VariancePreserving,
+    ] {
         let sampler = s.sampler_with([1234.5, -987.25], interp);
         // 5 x 8 + 5 and 8 + 5: partial chunks of eight; 3: a chunk of four
         let cases = [&points[..], &points[..13], &points[..8], &points[..3], &[]];
@@ -307,7 +311,11 @@ fn surface_variance_matches_union_of_bands() {
 #[test]
 fn far_origin_keeps_precision() {
     let s = small(7);
-    for interp in [Interp::Bilinear, Interp::Bicubic] {
+    for interp in [
+        Interp::Bilinear,
+        Interp::Bicubic,
+        Interp::VariancePreserving,
+    ] {
         for &(u, v) in &[(0.37f32, -1.25f32), (13.3, 7.9), (-250.0, 410.5)] {
             let far = [100_000.0 + 0.125, -73_000.0 - 0.5];
             let a = s.sampler_with(far, interp).sample(u, v);
@@ -412,6 +420,8 @@ fn layers_sum_and_set_time_moves_waves() {
 /// hold the spectrum's integral of k^2 P (a few per cent of realization scatter: the slope
 /// variance sits in many modes); reads between grid points lose some of it, bilinear more than
 /// bicubic, each layer no more than its grid holds; the sum's slopes are the layers' added.
+/// Variance-preserving reads keep each layer's grid slopes (within 1 %), and so the spectrum's
+/// within 2 % on the default sea, the bound the slopes must meet.
 #[test]
 fn mean_square_slope_of_the_spectrum_the_grid_and_the_lookup() {
     let read = |interp| {
@@ -421,8 +431,12 @@ fn mean_square_slope_of_the_spectrum_the_grid_and_the_lookup() {
         };
         Surface::new(&p, 3).unwrap().summary().clone()
     };
-    let (bilinear, bicubic) = (read(Interp::Bilinear), read(Interp::Bicubic));
-    for s in [&bilinear, &bicubic] {
+    let (bilinear, bicubic, preserving) = (
+        read(Interp::Bilinear),
+        read(Interp::Bicubic),
+        read(Interp::VariancePreserving),
+    );
+    for s in [&bilinear, &bicubic, &preserving] {
         assert!((s.mss_grid / s.mss_spectrum - 1.0).abs() < 0.03, "{s:?}");
         let layers: f64 = s.layers.iter().map(|l| l.mss_lookup).sum();
         // independent layers: cross terms average out over the 512^2 points
@@ -440,8 +454,16 @@ fn mean_square_slope_of_the_spectrum_the_grid_and_the_lookup() {
         bicubic.mss_lookup > bilinear.mss_lookup * 1.05,
         "{bicubic:?}"
     );
+    assert!(
+        (preserving.mss_lookup / preserving.mss_spectrum - 1.0).abs() < 0.02,
+        "{preserving:?}"
+    );
+    for l in &preserving.layers {
+        assert!((l.mss_lookup / l.mss_grid - 1.0).abs() < 0.01, "{l:?}");
+    }
     // The grid does not depend on how it is read.
     assert_eq!(bilinear.mss_grid, bicubic.mss_grid);
+    assert_eq!(bilinear.mss_grid, preserving.mss_grid);
 }
 
 #[test]

@@ -54,9 +54,14 @@ pub enum Interp {
     Bilinear,
     /// Catmull-Rom over 16 texels, error O(dx^3); about 3x the cost.
     Bicubic,
+    /// Bilinear weights, each field's blend divided by its own standard deviation relative to
+    /// a texel's, from the field's correlations between neighbouring texels (variance-preserving
+    /// blending): every field keeps its grid variance at every point, so the slopes keep the
+    /// spectrum's mean square where a bilinear blend of waves 2-5 texels long loses 10-25 % of it.
+    VariancePreserving,
 }
 
-super::choice!(Interp { Bilinear => "bilinear", Bicubic => "bicubic" });
+super::choice!(Interp { Bilinear => "bilinear", Bicubic => "bicubic", VariancePreserving => "variance-preserving" });
 
 /// How the layers share the spectrum's wavenumbers (see [`OceanParams::partition`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]

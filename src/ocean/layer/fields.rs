@@ -41,6 +41,7 @@ impl Layer {
     pub fn compute_fields(&mut self, t: f64) {
         let n = self.n;
         self.time_s = t;
+        self.lag_correlations = std::sync::OnceLock::new();
         let dk = TAU / self.size_m;
         let signed = move |i: usize| signed_index(i, n);
         let lam = self.choppiness;

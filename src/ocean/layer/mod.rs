@@ -43,9 +43,9 @@ mod amplitudes;
 mod fields;
 mod read;
 
-pub(crate) use read::add_texel;
 #[cfg(test)]
 use read::{LANE_RANGE, split, split_lanes};
+pub(crate) use read::{LagCorrelations, add_texel};
 
 /// Number of fields per texel.
 pub const FIELD_COUNT: usize = 8;
@@ -96,6 +96,9 @@ pub struct Layer {
     expected_variance: f64,
     /// Texels, z-major (index iz * n + ix); texel (ix, iz) is at (ix L/n, iz L/n).
     fields: Vec<Texel>,
+    /// Each field's correlations between neighbouring texels, for variance-preserving reads:
+    /// computed on first use, forgotten when the fields change.
+    lag_correlations: std::sync::OnceLock<LagCorrelations>,
     fft: Arc<dyn Fft<f32>>,
     inv_dx: f64,
 }
@@ -215,6 +218,7 @@ impl Layer {
             depth_m,
             expected_variance,
             fields: vec![[0.0; FIELD_COUNT]; n * n],
+            lag_correlations: std::sync::OnceLock::new(),
             fft,
             inv_dx: n as f64 / size_m,
         };

@@ -1,9 +1,10 @@
 //! Reads of a layer between its grid points: bilinear (the paper's), in lanes for the
-//! renderer's batches, Catmull-Rom bicubic, and the direct Fourier sum that is the oracle for
-//! both.
+//! renderer's batches, Catmull-Rom bicubic, variance-preserving, and the direct Fourier sum that
+//! is the oracle for them.
 
 use std::f64::consts::TAU;
 
+use rayon::prelude::*;
 use rustfft::num_complex::Complex;
 
 use super::{FIELD_COUNT, Layer, Texel, field, signed_index};
@@ -65,6 +66,23 @@ pub(super) fn split(p: f64) -> (i64, f32) {
     (i, (p - i as f64) as f32)
 }
 
+/// Each field's correlation with itself one texel away: along x, along z, and along the two
+/// diagonals (+x +z and +x -z), in [`field`](super::field) order.
+pub type LagCorrelations = [[f32; 4]; FIELD_COUNT];
+
+/// Divides each field of a bilinear blend at fractions (fx, fz) by the blend's standard
+/// deviation relative to one texel's (see [`Layer::variance_preserving`]).
+#[inline]
+fn preserve_variance(r: &mut Texel, fx: f32, fz: f32, rho: &LagCorrelations) {
+    let (gx, gz) = (1.0 - fx, 1.0 - fz);
+    let (a, b) = (gx * gx + fx * fx, gz * gz + fz * fz);
+    let (p, q) = (2.0 * gx * fx, 2.0 * gz * fz);
+    for (v, rho) in r.iter_mut().zip(rho) {
+        let var = a * b + p * b * rho[0] + q * a * rho[1] + 0.5 * p * q * (rho[2] + rho[3]);
+        *v /= var.max(1e-6).sqrt();
+    }
+}
+
 #[inline]
 fn catmull_rom(t: f32) -> [f32; 4] {
     let t2 = t * t;
@@ -95,7 +113,8 @@ impl Layer {
     }
 
     /// Adds the bilinear reads at the grid coordinates `(px[l], pz[l])` of the first `count`
-    /// lanes into `sum[l]`, bit for bit `sum[l] += self.bilinear(px[l], pz[l])`. The lanes'
+    /// lanes into `sum[l]`, bit for bit `sum[l] += self.bilinear(px[l], pz[l])`, or with
+    /// `preserve` bit for bit `sum[l] += self.variance_preserving(px[l], pz[l])`. The lanes'
     /// cells and weights are computed together (vector code, where `bilinear` spends most of
     /// its instructions one point at a time); each lane then reads its four texels. Lanes past
     /// `count` are computed and not read, whatever they hold.
@@ -105,6 +124,7 @@ impl Layer {
         px: &[f64; LANES],
         pz: &[f64; LANES],
         count: usize,
+        preserve: bool,
         sum: &mut [Texel; LANES],
     ) {
         debug_assert!(count <= LANES);
@@ -115,7 +135,12 @@ impl Layer {
         if !in_range {
             // Far out (or NaN): the scalar read, whose split takes any coordinate.
             for l in 0..count {
-                add_texel(&mut sum[l], &self.bilinear(px[l], pz[l]));
+                let t = if preserve {
+                    self.variance_preserving(px[l], pz[l])
+                } else {
+                    self.bilinear(px[l], pz[l])
+                };
+                add_texel(&mut sum[l], &t);
             }
             return;
         }
@@ -140,13 +165,82 @@ impl Layer {
         // check: the compiler knows i & (len - 1) < len.
         let f = &self.fields[..];
         let mask = f.len() - 1;
+        let rho = preserve.then(|| self.lag_correlations());
         for (l, s) in sum.iter_mut().enumerate().take(count) {
-            let t = blend(
+            let mut t = blend(
                 std::array::from_fn(|c| &f[cells[c][l] as usize & mask]),
                 std::array::from_fn(|c| weights[c][l]),
             );
+            if let Some(rho) = rho {
+                preserve_variance(&mut t, fx[l], fz[l], rho);
+            }
             add_texel(s, &t);
         }
+    }
+
+    /// Each field's correlations between neighbouring texels over the whole (periodic) grid:
+    /// the realization's own, so a variance-preserving read keeps the grid's variance. A field
+    /// that is zero everywhere gets correlations of 1 (its reads stay zero).
+    pub fn lag_correlations(&self) -> &LagCorrelations {
+        self.lag_correlations.get_or_init(|| {
+            let n = self.n;
+            let f = &self.fields;
+            // per field: the sums of v^2 and of v times its four neighbours
+            let sums = (0..n)
+                .into_par_iter()
+                .map(|iz| {
+                    let (row, up) = (&f[iz * n..][..n], &f[(iz + 1) % n * n..][..n]);
+                    let mut s = [[0f64; 5]; FIELD_COUNT];
+                    for ix in 0..n {
+                        let (right, left) = ((ix + 1) % n, (ix + n - 1) % n);
+                        let near = [&row[right], &up[ix], &up[right], &up[left]];
+                        for (j, s) in s.iter_mut().enumerate() {
+                            let v = row[ix][j] as f64;
+                            s[0] += v * v;
+                            for (s, t) in s[1..].iter_mut().zip(near) {
+                                *s += v * t[j] as f64;
+                            }
+                        }
+                    }
+                    s
+                })
+                .reduce(
+                    || [[0f64; 5]; FIELD_COUNT],
+                    |mut a, b| {
+                        for (a, b) in a.iter_mut().zip(&b) {
+                            for (a, b) in a.iter_mut().zip(b) {
+                                *a += b;
+                            }
+                        }
+                        a
+                    },
+                );
+            sums.map(|s| {
+                if s[0] > 0.0 {
+                    std::array::from_fn(|l| (s[l + 1] / s[0]) as f32)
+                } else {
+                    [1.0; 4]
+                }
+            })
+        })
+    }
+
+    /// Variance-preserving read at grid coordinates (px, pz) (wraps): the bilinear blend of
+    /// each field divided by its standard deviation relative to one texel's. With weights
+    /// w = a_i b_j (a = (1 - fx, fx), b = (1 - fz, fz)) and the field's correlations rho one
+    /// texel away, the blend's variance over a texel's is sum w_c w_d rho(c - d) =
+    /// |a|^2 |b|^2 + 2 a0 a1 |b|^2 rho_x + 2 b0 b1 |a|^2 rho_z + 2 a0 a1 b0 b1 (rho_d1 + rho_d2)
+    /// (variance-preserving blending as in Heitz & Neyret 2018, with the texels' correlation).
+    /// At a grid point it is the texel; between, each field keeps its grid variance.
+    #[inline]
+    pub fn variance_preserving(&self, px: f64, pz: f64) -> Texel {
+        let (ix, fx) = split(px);
+        let (iz, fz) = split(pz);
+        let (t00, t10) = (self.texel(ix, iz), self.texel(ix + 1, iz));
+        let (t01, t11) = (self.texel(ix, iz + 1), self.texel(ix + 1, iz + 1));
+        let mut r = blend([t00, t10, t01, t11], bilinear_weights(fx, fz));
+        preserve_variance(&mut r, fx, fz, self.lag_correlations());
+        r
     }
 
     /// Catmull-Rom bicubic read at grid coordinates (px, pz) (wraps).
@@ -177,6 +271,7 @@ impl Layer {
         match interp {
             Interp::Bilinear => self.bilinear(px, pz),
             Interp::Bicubic => self.bicubic(px, pz),
+            Interp::VariancePreserving => self.variance_preserving(px, pz),
         }
     }
 
