@@ -273,8 +273,9 @@ pub fn write_ply(mesh: &Mesh, path: &std::path::Path) -> Result<(), WriteError> 
         let (normals, uvs) = (!mesh.normals.is_empty(), !mesh.uvs.is_empty());
         write!(
             w,
-            "ply\nformat binary_little_endian 1.0\ncomment vastocean mesh: camera-relative \
-             positions, y up; s t = nominal horizontal position (x, z), m\nelement vertex {}\n\
+            "ply\nformat binary_little_endian 1.0\ncomment vastocean mesh: x z relative to the \
+             camera, y above mean sea level under it, y up; s t = nominal horizontal position \
+             (x, z), m\nelement vertex {}\n\
              property float x\nproperty float y\nproperty float z\n",
             mesh.vertex_count()
         )?;

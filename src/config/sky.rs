@@ -87,9 +87,10 @@ pub struct SkyConfig {
     /// Sky dome altitude, m (the paper: 200 km); absent = at infinity.
     pub dome_altitude_m: Option<f64>,
     pub scale: f32,
-    /// Clip a sky map as a photograph clips the sun: texels brighter (in luminance) than
-    /// `clip_relative` times the median luminance of the map above the horizon are scaled down
-    /// to it. Absent = the map as it is. (The paper's skies were photographs with clipped suns.)
+    /// Clip the sky as a photograph clips the sun: radiance brighter (in luminance) than
+    /// `clip_relative` times the median luminance above the horizon is scaled down to it (a
+    /// map's texels, or the built-in sky ray by ray). Absent = the sky as it is. (The paper's
+    /// skies were photographs with clipped suns.)
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub clip_relative: Option<f32>,
 }

@@ -135,8 +135,8 @@ pub fn make_sky(cfg: &SceneConfig) -> Result<Sky, RenderError> {
         Some(f) => Sky::load(f)?,
         None => Sky::analytic(cfg.sky.analytic),
     };
-    if let (Some(c), crate::sky::SkySource::Map(img)) = (cfg.sky.clip_relative, &mut sky.source) {
-        crate::sky::tools::clip_relative(img, c);
+    if let Some(c) = cfg.sky.clip_relative {
+        sky.clip_relative(c);
     }
     sky.dome_altitude_m = cfg.sky.dome_altitude_m;
     sky.earth_radius_m = EARTH_RADIUS_M;

@@ -38,7 +38,7 @@ impl AnalyticSky {
 
     /// Downwelling irradiance on a horizontal surface (see [`Sky::irradiance`](super::Sky::irradiance)).
     pub fn irradiance(&self) -> Vec3 {
-        Evaluator::new(self).irradiance()
+        Evaluator::new(self).irradiance(f32::INFINITY)
     }
 }
 
@@ -111,13 +111,21 @@ impl Evaluator {
         e
     }
 
-    /// Downwelling irradiance on a horizontal surface: the sky without the disc sampled on a
-    /// 1024 x 512 map (exact for the smooth part to the map's resolution), plus the disc, 1.5
-    /// texels across there, integrated on its own.
-    pub fn irradiance(&self) -> Vec3 {
-        let smooth = map_irradiance(&rasterize_with(&self.without_disc(), 1024));
+    /// Downwelling irradiance on a horizontal surface of the sky clipped to luminance `clip`
+    /// (see [`super::Sky::clip_luminance`]): the sky without the disc sampled on a 1024 x 512
+    /// map (exact for the smooth part to the map's resolution), plus the disc, 1.5 texels
+    /// across there, integrated on its own.
+    pub fn irradiance(&self, clip: f32) -> Vec3 {
+        let mut smooth = rasterize_with(&self.without_disc(), 1024);
+        for p in &mut smooth.pixels {
+            *p = super::clip(*p, clip);
+        }
+        let smooth = map_irradiance(&smooth);
         match self.disc() {
-            Some((sun, rgb)) => smooth + rgb * disc_cosine_solid_angle(sun),
+            Some((sun, rgb)) => {
+                smooth
+                    + Vec3::from(super::clip(rgb.to_array(), clip)) * disc_cosine_solid_angle(sun)
+            }
             None => smooth,
         }
     }

@@ -41,6 +41,18 @@ pub fn check_sun_elevation(deg: f64) -> Result<(), String> {
     }
 }
 
+/// `c` scaled down to luminance `limit` where it is brighter, hue kept (`c` unchanged, bit for
+/// bit, below it or with an infinite limit).
+#[inline(always)]
+pub(crate) fn clip(c: [f32; 3], limit: f32) -> [f32; 3] {
+    let l = crate::color::luminance(c);
+    if l > limit {
+        c.map(|v| v * (limit / l))
+    } else {
+        c
+    }
+}
+
 /// The atmospheric turbidities the Preetham clear sky accepts: the range its coefficients were
 /// fitted on (Preetham et al. 1999, about 2 to 10).
 pub const TURBIDITY_RANGE: (f64, f64) = (1.7, 10.0);
@@ -69,6 +81,10 @@ pub struct Sky {
     pub camera_height_m: f64,
     /// Multiplies the map or analytic radiance.
     pub scale: f32,
+    /// An analytic sky's radiance is scaled down to this luminance where it is brighter (hue
+    /// kept), as a photograph clips the sun ([`Sky::clip_relative`]); infinite = not clipped.
+    /// A map is clipped in its texels instead.
+    pub clip_luminance: f32,
 }
 
 impl Sky {
@@ -82,6 +98,7 @@ impl Sky {
             earth_radius_m: 6_371_000.0,
             camera_height_m: 2.0,
             scale: 1.0,
+            clip_luminance: f32::INFINITY,
         }
     }
 
@@ -100,7 +117,10 @@ impl Sky {
     pub fn radiance(&self, org: Vec3, dir: Vec3) -> Vec3 {
         self.scale
             * match &self.source {
-                SkySource::Analytic { eval, .. } => eval.radiance(self.unit_direction(org, dir)),
+                SkySource::Analytic { eval, .. } => Vec3::from(clip(
+                    eval.radiance(self.unit_direction(org, dir)).to_array(),
+                    self.clip_luminance,
+                )),
                 SkySource::Map(img) => lookup(img, self.direction(org, dir)),
             }
     }
@@ -162,13 +182,16 @@ impl Sky {
                         [x[i], y[i], z[i]] = self.unit_direction(*o, *d).to_array();
                     }
                     c.lanes(&x, &y, &z, &mut l);
+                    for l in &mut l {
+                        *l = clip(*l, self.clip_luminance);
+                    }
                 }
                 Lanes::HandMade(h) => {
                     for (i, (o, d)) in o.iter().zip(d).enumerate() {
                         [x[i], y[i], z[i]] = self.unit_direction(*o, *d).to_array();
                     }
                     for i in 0..SKY_LANES {
-                        l[i] = h.lane([x[i], y[i], z[i]]);
+                        l[i] = clip(h.lane([x[i], y[i], z[i]]), self.clip_luminance);
                     }
                 }
             }
@@ -214,8 +237,23 @@ impl Sky {
         self.scale
             * match &self.source {
                 SkySource::Map(m) => map_irradiance(m),
-                SkySource::Analytic { eval, .. } => eval.irradiance(),
+                SkySource::Analytic { eval, .. } => eval.irradiance(self.clip_luminance),
             }
+    }
+
+    /// Clips the sky as a photograph clips the sun: radiance brighter (in luminance) than
+    /// `factor` times the median luminance above the horizon is scaled down to it, hue kept. A
+    /// map's texels are clipped; an analytic sky's median is taken from a 1024 x 512 raster and
+    /// its radiance clipped ray by ray. Returns the clip luminance.
+    pub fn clip_relative(&mut self, factor: f32) -> f32 {
+        match &mut self.source {
+            SkySource::Map(img) => tools::clip_relative(img, factor).0,
+            SkySource::Analytic { model, .. } => {
+                let limit = factor * tools::median_luminance_above_horizon(&rasterize(model, 1024));
+                self.clip_luminance = limit;
+                limit
+            }
+        }
     }
 
     /// From the camera to where the ray meets the dome, a sphere about the earth's centre

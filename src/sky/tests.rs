@@ -364,3 +364,42 @@ fn bad_maps_are_rejected_with_the_reason() {
             .contains("texel (3, 0)")
     );
 }
+
+/// `clip_relative` on the built-in sky clips as on a map: the disc (2e4 times the median sky
+/// at 3 degrees) drops to the limit, hue kept; the sky below the limit keeps its bits; batches
+/// give what single rays give; the irradiance loses the disc's excess. The limit is the same
+/// as the map of the same sky gets.
+#[test]
+fn clipping_the_built_in_sky_caps_its_sun() {
+    let model = AnalyticSky::default();
+    let mut sky = Sky::analytic(model);
+    let unclipped = sky.clone();
+    let limit = sky.clip_relative(100.0);
+    let mut map = Sky::analytic(model);
+    map.source = SkySource::Map(rasterize(&model, 1024));
+    assert_eq!(map.clip_relative(100.0), limit);
+    let camera = Vec3::new(0.0, sky.camera_height_m as f32, 0.0);
+    let sun = model.sun_direction();
+    let (before, after) = (unclipped.radiance(camera, sun), sky.radiance(camera, sun));
+    let lum = |c: Vec3| crate::color::luminance(c.to_array());
+    assert!(lum(before) > 50.0 * limit, "{before} vs {limit}");
+    assert!(
+        (lum(after) / limit - 1.0).abs() < 1e-5,
+        "{after} vs {limit}"
+    );
+    assert!(((after / before) - after.x / before.x).abs().max_element() < 1e-6);
+    let up = Vec3::new(0.3, 0.5, -0.2).normalize();
+    assert_eq!(sky.radiance(camera, up), unclipped.radiance(camera, up));
+    let dirs = [sun, up, Vec3::Y, sun];
+    let mut many = [Vec3::ZERO; 4];
+    sky.radiance_many(&[camera; 4], &dirs, &mut many);
+    for (d, l) in dirs.iter().zip(many) {
+        assert_eq!(l, sky.radiance(camera, *d));
+    }
+    // the irradiance loses the disc's excess over the limit, times its cosine-weighted solid
+    // angle (the disc is 0.27 degrees in radius, 3 degrees up)
+    let omega = (std::f64::consts::TAU * (1.0 - (SUN_RADIUS_RAD as f64).cos())) as f32;
+    let lost = lum(unclipped.irradiance()) - lum(sky.irradiance());
+    let want = (lum(before) - limit) * omega * sun.y;
+    assert!((lost / want - 1.0).abs() < 0.05, "{lost} vs {want}");
+}

@@ -225,18 +225,25 @@ pub fn remove_ground(img: &mut RgbImage, ground: Ground) {
     }
 }
 
+/// The median texel luminance of the map's upper half (0 for a map of one row).
+pub fn median_luminance_above_horizon(img: &RgbImage) -> f32 {
+    let upper = img.width * (img.height / 2);
+    let mut lum: Vec<f32> = img.pixels[..upper].iter().map(|&c| luminance(c)).collect();
+    if lum.is_empty() {
+        return 0.0;
+    }
+    let mid = lum.len() / 2;
+    *lum.select_nth_unstable_by(mid, f32::total_cmp).1
+}
+
 /// Clips the map as a photograph clips the sun: texels whose luminance exceeds `factor` times
 /// the median luminance above the horizon are scaled down to that luminance (hue kept).
 /// Returns the clip luminance and how many texels it touched.
 pub fn clip_relative(img: &mut RgbImage, factor: f32) -> (f32, usize) {
-    let upper = img.width * (img.height / 2);
-    let mut lum: Vec<f32> = img.pixels[..upper].iter().map(|&c| luminance(c)).collect();
-    if lum.is_empty() {
+    if img.height < 2 {
         return (0.0, 0);
     }
-    let mid = lum.len() / 2;
-    let (_, median, _) = lum.select_nth_unstable_by(mid, f32::total_cmp);
-    let limit = factor * *median;
+    let limit = factor * median_luminance_above_horizon(img);
     let mut clipped = 0;
     for p in &mut img.pixels {
         let l = luminance(*p);
