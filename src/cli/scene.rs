@@ -67,6 +67,11 @@ pub struct SceneFlags {
     /// (docs/accuracy.md, "The wrong-side policy").
     #[arg(long, value_parser = choice::<vastocean::config::WrongSide>())]
     wrong_side: Option<vastocean::config::WrongSide>,
+    /// How the ocean's layers are read between their grid points, for the mapped normals and the
+    /// mesh's vertices: bilinear (the paper's), bicubic, or variance-preserving (keeps the
+    /// spectrum's slopes; docs/ocean.md).
+    #[arg(long, value_parser = choice::<vastocean::ocean::Interp>())]
+    interp: Option<vastocean::ocean::Interp>,
 }
 
 impl SceneFlags {
@@ -98,6 +103,7 @@ impl SceneFlags {
                 "--camera-height",
             ),
             (self.threads.is_some(), "render.threads", "--threads"),
+            (self.interp.is_some(), "ocean.interp", "--interp"),
         ];
         set.into_iter()
             .filter(|(given, ..)| *given)
@@ -159,6 +165,7 @@ impl SceneFlags {
         s.render.threads = self.threads.unwrap_or(s.render.threads);
         s.render.backend = self.backend.unwrap_or(s.render.backend);
         s.render.wrong_side = self.wrong_side.unwrap_or(s.render.wrong_side);
+        s.ocean.interp = self.interp.unwrap_or(s.ocean.interp);
         Ok(s)
     }
 }
