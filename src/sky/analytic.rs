@@ -358,14 +358,37 @@ pub fn rasterize(sky: &AnalyticSky, width: usize) -> RgbImage {
     rasterize_with(&Evaluator::new(sky), width)
 }
 
+/// [`rasterize`] with the sky prepared: rows in parallel, the Preetham sky 16 texels at a time
+/// (the same bits as one at a time). Every render rasterizes its sky once for the irradiance.
 fn rasterize_with(sky: &Evaluator, width: usize) -> RgbImage {
+    use rayon::prelude::*;
+    const LANES: usize = super::SKY_LANES;
     let mut img = RgbImage::new(width, width / 2);
     let (w, h) = (width as f32, img.height as f32);
-    for y in 0..img.height {
-        for x in 0..width {
-            let d = equirect::pixel_direction(x as f32 + 0.5, y as f32 + 0.5, w, h);
-            img.pixels[y * width + x] = sky.radiance(d).to_array();
-        }
-    }
+    img.pixels
+        .par_chunks_mut(width.max(1))
+        .enumerate()
+        .for_each(|(y, row)| {
+            for (chunk, out) in row.chunks_mut(LANES).enumerate() {
+                let (mut dx, mut dy, mut dz) = ([0f32; LANES], [1f32; LANES], [0f32; LANES]);
+                for (i, _) in out.iter().enumerate() {
+                    let x = (chunk * LANES + i) as f32 + 0.5;
+                    let d = equirect::pixel_direction(x, y as f32 + 0.5, w, h);
+                    [dx[i], dy[i], dz[i]] = d.to_array();
+                }
+                match sky {
+                    Evaluator::Clear(c) => {
+                        let mut l = [[0f32; 3]; LANES];
+                        c.lanes(&dx, &dy, &dz, &mut l);
+                        out.copy_from_slice(&l[..out.len()]);
+                    }
+                    _ => {
+                        for (i, p) in out.iter_mut().enumerate() {
+                            *p = sky.radiance(Vec3::new(dx[i], dy[i], dz[i])).to_array();
+                        }
+                    }
+                }
+            }
+        });
     img
 }
