@@ -79,7 +79,7 @@ enum Command {
     ///
     /// A scene without a sky map is lit by the built-in sky (`[sky.analytic]` in the scene
     /// file): by default the clear sky of Preetham, Shirley & Smits 1999 ("A Practical Analytic
-    /// Model for Daylight"), turbidity 2.5, the sun 3 degrees up in the south, evaluated for
+    /// Model for Daylight"), turbidity 2.5, the sun 3 degrees up at azimuth 180, evaluated for
     /// every ray with its 0.53 degree sun disc at the radiance the model's atmosphere transmits.
     /// It is the model `sky generate --kind clear` renders into maps, in the same unit (1 = 100
     /// kcd/m^2). `hand-made-clear` is a hand-made sky with no physical model behind it.

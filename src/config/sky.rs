@@ -42,7 +42,8 @@ pub enum AnalyticSky {
 }
 
 /// The clear skies' defaults, key by key (every key of a scene file is optional): the sun of
-/// the default scene, 3 degrees up in the south, under the turbidity of the shipped maps.
+/// the default scene, 3 degrees up at azimuth 180 (towards -x), under the turbidity of the
+/// shipped maps.
 mod clear {
     pub fn sun_elevation_deg() -> f32 {
         3.0
