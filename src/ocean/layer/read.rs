@@ -234,11 +234,8 @@ impl Layer {
     /// At a grid point it is the texel; between, each field keeps its grid variance.
     #[inline]
     pub fn variance_preserving(&self, px: f64, pz: f64) -> Texel {
-        let (ix, fx) = split(px);
-        let (iz, fz) = split(pz);
-        let (t00, t10) = (self.texel(ix, iz), self.texel(ix + 1, iz));
-        let (t01, t11) = (self.texel(ix, iz + 1), self.texel(ix + 1, iz + 1));
-        let mut r = blend([t00, t10, t01, t11], bilinear_weights(fx, fz));
+        let mut r = self.bilinear(px, pz);
+        let ((_, fx), (_, fz)) = (split(px), split(pz));
         preserve_variance(&mut r, fx, fz, self.lag_correlations());
         r
     }
