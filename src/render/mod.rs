@@ -2,11 +2,17 @@
 //! branching and normal mapping, the film that turns paths into pixels, and the pipeline that
 //! runs a scene from ocean to image. The sky light lives in [`crate::sky`].
 
+mod bsdf;
 pub mod camera;
+pub mod counters;
+pub mod earth_tilt;
 pub mod film;
 pub mod integrator;
+mod interface;
+mod normals;
 pub mod pipeline;
 pub mod report;
+pub mod shortcuts;
 pub mod water;
 
 pub use crate::config::{NormalMode, Projection, Water};
