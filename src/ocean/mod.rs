@@ -9,6 +9,7 @@
 pub mod layer;
 pub mod preview;
 pub mod repeat;
+pub mod slopes;
 pub mod spectrum;
 pub mod surface;
 

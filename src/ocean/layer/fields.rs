@@ -11,7 +11,7 @@ use super::{C32, Layer, signed_index};
 impl Layer {
     /// h~(k, t) of eq. 2 for cell `i` (kx-major) in f64.
     #[inline]
-    pub(super) fn h_tilde(&self, ix: usize, iz: usize, t: f64) -> Complex<f64> {
+    pub(crate) fn h_tilde(&self, ix: usize, iz: usize, t: f64) -> Complex<f64> {
         let n = self.n;
         let i = ix * n + iz;
         let a = self.h0[i];

@@ -104,7 +104,7 @@ pub struct Layer {
 }
 
 #[inline]
-fn signed_index(i: usize, n: usize) -> f64 {
+pub(crate) fn signed_index(i: usize, n: usize) -> f64 {
     if i < n / 2 {
         i as f64
     } else {
