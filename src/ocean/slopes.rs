@@ -83,8 +83,7 @@ impl Layer {
                         }
                         let kz = signed_index(iz, n) * dk;
                         let k = kx.hypot(kz);
-                        let b = ((k.ln() - ln_k0) * BINS_PER_OCTAVE as f64
-                            / std::f64::consts::LN_2)
+                        let b = ((k.ln() - ln_k0) * BINS_PER_OCTAVE as f64 / std::f64::consts::LN_2)
                             .floor()
                             .clamp(0.0, (bins - 2) as f64) as usize;
                         let a = &mut acc[b];
@@ -144,7 +143,11 @@ impl SurfaceSlopes {
     /// The surface's layers' tables (in parallel); for its time.
     pub fn new(surface: &Surface) -> SurfaceSlopes {
         SurfaceSlopes {
-            layers: surface.layers().par_iter().map(Layer::slope_bands).collect(),
+            layers: surface
+                .layers()
+                .par_iter()
+                .map(Layer::slope_bands)
+                .collect(),
         }
     }
 
@@ -252,7 +255,10 @@ mod tests {
             let unresolved = (s.cov[0] + s.cov[2]) as f64;
             assert!((resolved + unresolved - tr).abs() < 1e-5 * tr, "width {w}");
             assert!(unresolved >= last - 1e-7 * tr, "width {w}");
-            assert!(unresolved - last < 0.05 * tr, "a jump of the split at width {w}");
+            assert!(
+                unresolved - last < 0.05 * tr,
+                "a jump of the split at width {w}"
+            );
             last = unresolved;
         }
     }

@@ -9,6 +9,7 @@ pub mod earth_tilt;
 pub mod film;
 pub mod integrator;
 mod interface;
+pub mod microfacet;
 mod normals;
 pub mod pipeline;
 pub mod report;
