@@ -92,7 +92,7 @@ impl Evaluator {
     }
 
     /// The sun's direction and its disc's radiance, for the skies with a sun.
-    fn disc(&self) -> Option<(Vec3, Vec3)> {
+    pub(super) fn disc(&self) -> Option<(Vec3, Vec3)> {
         match self {
             Evaluator::Clear(c) => Some((Vec3::from(c.sun), Vec3::from(c.sun_rgb))),
             Evaluator::HandMade(h) => Some((Vec3::from(h.sun), h.sun_radiance * SUN_COLOUR)),
@@ -101,7 +101,7 @@ impl Evaluator {
     }
 
     /// The same sky without its sun's disc.
-    fn without_disc(&self) -> Evaluator {
+    pub(super) fn without_disc(&self) -> Evaluator {
         let mut e = *self;
         match &mut e {
             Evaluator::Clear(c) => c.sun_rgb = [0.0; 3],

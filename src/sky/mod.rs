@@ -8,6 +8,7 @@
 mod analytic;
 mod map;
 pub mod procedural;
+mod sampling;
 pub mod tools;
 
 use std::path::Path;
@@ -20,6 +21,7 @@ pub use analytic::rasterize;
 pub use analytic::{ClearLanes, Evaluator, HandMadeLanes};
 use map::{Taps, read_taps, taps};
 pub use map::{lookup, map_irradiance, validate_map};
+pub use sampling::{SunLight, SunSample};
 
 /// Angular radius of the analytic sky's sun, radians (0.53 degree diameter).
 pub const SUN_RADIUS_RAD: f32 = 0.004_625;
@@ -266,18 +268,13 @@ impl Sky {
     /// rad of the f64 intersection at the default 200 km, ~1e-6 rad for a dome 1 km up (test);
     /// the f64 formula this replaced was 8 % of the default render's trace.
     fn dome_offset(&self, org: Vec3, dir: Vec3, altitude: f64) -> Vec3 {
-        let (r, h) = (self.earth_radius_m, self.camera_height_m);
-        // the camera's distance from the earth's centre, and |camera - centre|^2 - R'^2
-        let rc = (r + h) as f32;
-        let c0 = ((h - altitude) * (2.0 * r + h + altitude)) as f32;
-        let p = Vec3::new(org.x, org.y - h as f32, org.z);
-        // |o + t d|^2 = R'^2 with o = p + (0, rc, 0) and |d| = 1: t^2 + 2 b t + c = 0
-        let b = p.dot(dir) + rc * dir.y;
-        let c = p.length_squared() + 2.0 * rc * p.y + c0;
-        let s = (b * b - c).max(0.0).sqrt();
-        // the far root (we are inside): -b + s, written without cancellation when b > 0
-        let t = if b > 0.0 { -c / (b + s) } else { s - b };
-        p + t * dir
+        dome_offset(
+            self.earth_radius_m,
+            self.camera_height_m,
+            altitude,
+            org,
+            dir,
+        )
     }
 
     /// Direction from the camera to where the ray meets the dome.
@@ -285,6 +282,23 @@ impl Sky {
     fn dome_direction(&self, org: Vec3, dir: Vec3, altitude: f64) -> Vec3 {
         self.dome_offset(org, dir, altitude).normalize()
     }
+}
+
+/// [`Sky::dome_offset`] for an earth of radius `r`, a camera `h` above it and a dome at
+/// `altitude`: where the ray from `org` along unit `dir` meets the dome, from the camera.
+#[inline]
+pub(crate) fn dome_offset(r: f64, h: f64, altitude: f64, org: Vec3, dir: Vec3) -> Vec3 {
+    // the camera's distance from the earth's centre, and |camera - centre|^2 - R'^2
+    let rc = (r + h) as f32;
+    let c0 = ((h - altitude) * (2.0 * r + h + altitude)) as f32;
+    let p = Vec3::new(org.x, org.y - h as f32, org.z);
+    // |o + t d|^2 = R'^2 with o = p + (0, rc, 0) and |d| = 1: t^2 + 2 b t + c = 0
+    let b = p.dot(dir) + rc * dir.y;
+    let c = p.length_squared() + 2.0 * rc * p.y + c0;
+    let s = (b * b - c).max(0.0).sqrt();
+    // the far root (we are inside): -b + s, written without cancellation when b > 0
+    let t = if b > 0.0 { -c / (b + s) } else { s - b };
+    p + t * dir
 }
 
 #[cfg(test)]
