@@ -5,54 +5,64 @@
 //! amplitudes at its time, layer by layer (each layer holds its share of the spectrum, so the
 //! partition weights are in them).
 //!
-//! A ray's footprint of width w resolves the waves longer than two footprints, |k| < pi / w
-//! ([`SurfaceSlopes::split`]): the waves above that cut-off become a Gaussian slope
-//! distribution of the summed covariance of every layer's part above it; each layer's field
-//! is kept scaled by the square root of the share of its slope variance below the cut-off, so
-//! that the resolved slope and the unresolved distribution together keep each layer's slope
-//! variance. A layer whose waves all lie above the cut-off is not read at all. The cumulative
-//! covariance is tabulated at [`BINS_PER_OCTAVE`] bins an octave and interpolated linearly in
-//! log k, so the split moves smoothly with the footprint: no line where a layer switches off.
+//! A ray's footprint is a Gaussian of std sigma over the surface ([`SurfaceSlopes::split`]): a
+//! wave of wavenumber k seen through it keeps exp(-|k|^2 sigma^2) of its slope variance (the
+//! squared transfer function of the filter), and the rest, the variance the wave's slope has
+//! inside the footprint, becomes a Gaussian slope distribution: the summed covariance of every
+//! layer's filtered-out part. Each layer's field is kept scaled by the square root of the share
+//! of its slope variance the filter passes, so that the resolved slope and the unresolved
+//! distribution together keep each layer's slope variance. A layer the footprint filters out
+//! completely is not read at all. The filtered covariance is tabulated for footprints at
+//! [`BINS_PER_OCTAVE`] steps an octave, from the realization binned at as many bins an octave
+//! of |k|, and interpolated linearly in log sigma: the split moves smoothly with the footprint,
+//! with no line where a layer switches off.
 
 use rayon::prelude::*;
 
 use super::layer::{Layer, signed_index};
 use super::{MAX_LAYERS, Surface};
 
-/// Resolution of the cumulative tables.
+/// The smallest share of a layer's slope variance a footprint keeps as mapped normals; below
+/// it the layer is wholly unresolved and not read (`Sampler::normals_weighted`).
+pub const MIN_RESOLVED_SHARE: f64 = 1e-3;
+
+/// Resolution of the tables.
 pub const BINS_PER_OCTAVE: usize = 8;
 
 /// A 2 x 2 slope covariance (xx, xz, zz), m^0.
 pub type Cov = [f64; 3];
 
-/// One layer's slope covariance above each wavenumber of a log-spaced table.
+/// One layer's slope covariance, whole and as seen through Gaussian footprints of a range of
+/// widths.
 #[derive(Clone, Debug)]
 pub struct SlopeBands {
-    /// ln of the table's first wavenumber, rad/m.
+    /// ln of the wavenumber whose reciprocal is the first node's footprint std, rad/m.
     ln_k0: f64,
-    /// `above[i]`: the covariance of the waves with |k| >= k0 2^(i / BINS_PER_OCTAVE); the last
-    /// entry is zero (past every wave of the layer).
-    above: Vec<Cov>,
+    total: Cov,
+    /// `resolved[i]`: the covariance of the slope averaged over a Gaussian footprint of std
+    /// 1 / (k0 2^(i / BINS_PER_OCTAVE)) m, sum over the waves of exp(-|k|^2 s^2) k k^T |h~|^2.
+    resolved: Vec<Cov>,
 }
 
 impl SlopeBands {
     /// The covariance of all the layer's waves.
     pub fn total(&self) -> Cov {
-        self.above[0]
+        self.total
     }
 
-    /// The covariance of the layer's waves with |k| >= `k` (linear in log k between nodes).
-    pub fn above(&self, k: f64) -> Cov {
-        let x = (k.ln() - self.ln_k0) * BINS_PER_OCTAVE as f64 / std::f64::consts::LN_2;
+    /// The covariance of the slope averaged over a Gaussian footprint of std `sigma_m` (linear
+    /// in log sigma between nodes; all of it below the table, none above).
+    pub fn resolved(&self, sigma_m: f64) -> Cov {
+        let x = (-sigma_m.ln() - self.ln_k0) * BINS_PER_OCTAVE as f64 / std::f64::consts::LN_2;
+        let last = self.resolved.len() - 1;
         if x.is_nan() || x <= 0.0 {
-            return self.above[0];
-        }
-        let last = self.above.len() - 1;
-        if x >= last as f64 {
             return [0.0; 3];
         }
+        if x >= last as f64 {
+            return self.total;
+        }
         let (i, f) = (x.floor() as usize, x.fract());
-        std::array::from_fn(|c| self.above[i][c] * (1.0 - f) + self.above[i + 1][c] * f)
+        std::array::from_fn(|c| self.resolved[i][c] * (1.0 - f) + self.resolved[i + 1][c] * f)
     }
 }
 
@@ -105,13 +115,32 @@ impl Layer {
                     a
                 },
             );
-        // Bin b holds the waves between nodes b and b + 1: the covariance above node i is the
-        // sum of bins i.. (the interpolation between nodes spreads each bin over its width).
-        let mut above = vec![[0.0f64; 3]; bins];
-        for i in (0..bins - 1).rev() {
-            above[i] = std::array::from_fn(|c| above[i + 1][c] + per_bin[i][c]);
+        // The footprint table runs four octaves past the band either way, where the Gaussian
+        // has passed everything or nothing.
+        let pad = 4 * BINS_PER_OCTAVE as i64;
+        let step = std::f64::consts::LN_2 / BINS_PER_OCTAVE as f64;
+        let centre = |b: usize| (ln_k0 + (b as f64 + 0.5) * step).exp();
+        let resolved = (-pad..bins as i64 + pad)
+            .map(|i| {
+                let sigma = 1.0 / (ln_k0 + i as f64 * step).exp();
+                let mut r = [0.0f64; 3];
+                for (b, cov) in per_bin.iter().enumerate() {
+                    let g = (-(centre(b) * sigma).powi(2)).exp();
+                    for c in 0..3 {
+                        r[c] += g * cov[c];
+                    }
+                }
+                r
+            })
+            .collect();
+        let total = per_bin
+            .iter()
+            .fold([0.0; 3], |a, b| std::array::from_fn(|c| a[c] + b[c]));
+        SlopeBands {
+            ln_k0: ln_k0 - pad as f64 * step,
+            total,
+            resolved,
         }
-        SlopeBands { ln_k0, above }
     }
 }
 
@@ -163,24 +192,30 @@ impl SurfaceSlopes {
         })
     }
 
-    /// What a footprint `width_m` wide resolves: waves with |k| < pi / width_m (twice the
-    /// width per wavelength). A width of zero (or below) resolves every wave.
-    pub fn split(&self, width_m: f32) -> Split {
-        if width_m.is_nan() || width_m <= 0.0 {
+    /// What a Gaussian footprint of std `sigma_m` resolves: each wave's slope seen through it
+    /// keeps exp(-|k|^2 sigma^2) of its variance, and the rest is the unresolved covariance. A
+    /// footprint of zero (or below) resolves every wave.
+    pub fn split(&self, sigma_m: f32) -> Split {
+        if sigma_m.is_nan() || sigma_m <= 0.0 {
             return Split::RESOLVED;
         }
-        let k_cut = std::f64::consts::PI / width_m as f64;
+        let sigma = sigma_m as f64;
         let mut s = Split::RESOLVED;
         let mut cov = [0.0f64; 3];
         for (w, l) in s.weights.iter_mut().zip(&self.layers) {
-            let (total, above) = (l.total(), l.above(k_cut));
+            let (total, mut resolved) = (l.total(), l.resolved(sigma));
             let t = total[0] + total[2];
             if t > 0.0 {
-                let resolved = (1.0 - (above[0] + above[2]) / t).clamp(0.0, 1.0);
-                *w = resolved.sqrt() as f32;
+                let mut share = ((resolved[0] + resolved[2]) / t).clamp(0.0, 1.0);
+                // A layer the filter passes less than this of is left out whole (its variance
+                // all unresolved), so that it need not be read.
+                if share < MIN_RESOLVED_SHARE {
+                    (share, resolved) = (0.0, [0.0; 3]);
+                }
+                *w = share.sqrt() as f32;
             }
             for c in 0..3 {
-                cov[c] += above[c];
+                cov[c] += total[c] - resolved[c];
             }
         }
         s.cov = cov.map(|v| v as f32);

@@ -166,17 +166,57 @@ impl Sampler<'_> {
             let (now, rest) = uv.split_at(k);
             let (into, rest_out) = std::mem::take(&mut out).split_at_mut(k);
             if k > 4 {
-                self.normals_in_lanes::<8>(now, into);
+                self.normals_in_lanes::<8>(now, None, into);
             } else {
-                self.normals_in_lanes::<4>(now, into);
+                self.normals_in_lanes::<4>(now, None, into);
             }
             (uv, out) = (rest, rest_out);
         }
     }
 
-    /// [`Sampler::normals`] of up to `LANES` points, bilinear or variance-preserving.
+    /// The unit normals at the points `uv` of the surface whose layers are scaled by
+    /// `weights[i]` at point i (filtered normals: each layer's resolved share, see
+    /// [`crate::ocean::slopes`]). A layer whose weight is zero at every point of a batch of
+    /// eight is not read. With every weight 1, bit for bit [`Sampler::normals`].
+    pub fn normals_weighted(
+        &self,
+        uv: &[[f32; 2]],
+        weights: &[[f32; MAX_LAYERS]],
+        out: &mut [[f32; 3]],
+    ) {
+        assert!(
+            uv.len() == out.len() && weights.len() == uv.len(),
+            "one normal per point"
+        );
+        for ((uv, w), out) in uv.chunks(8).zip(weights.chunks(8)).zip(out.chunks_mut(8)) {
+            if self.interp == Interp::Bicubic {
+                for ((n, &[u, v]), w) in out.iter_mut().zip(uv).zip(w) {
+                    let mut f = [0.0f32; FIELD_COUNT];
+                    for ((layer, o), &w) in self.layers.iter().zip(&self.origin).zip(w) {
+                        if w != 0.0 {
+                            let px = o[0] + u as f64 * layer.inv_dx();
+                            let pz = o[1] + v as f64 * layer.inv_dx();
+                            let t = layer.read(px, pz, self.interp).map(|x| x * w);
+                            add_texel(&mut f, &t);
+                        }
+                    }
+                    *n = normal_from_slopes(slopes(&f)).0;
+                }
+            } else {
+                self.normals_in_lanes::<8>(uv, Some(w), out);
+            }
+        }
+    }
+
+    /// [`Sampler::normals`] of up to `LANES` points, bilinear or variance-preserving, the
+    /// layers scaled by `weights` when given.
     #[inline]
-    fn normals_in_lanes<const LANES: usize>(&self, uv: &[[f32; 2]], out: &mut [[f32; 3]]) {
+    fn normals_in_lanes<const LANES: usize>(
+        &self,
+        uv: &[[f32; 2]],
+        weights: Option<&[[f32; MAX_LAYERS]]>,
+        out: &mut [[f32; 3]],
+    ) {
         let count = uv.len();
         let (mut u, mut v) = ([0.0f32; LANES], [0.0f32; LANES]);
         for (l, p) in uv.iter().enumerate() {
@@ -184,11 +224,23 @@ impl Sampler<'_> {
         }
         let mut sum = [[0.0f32; FIELD_COUNT]; LANES];
         let preserve = self.interp == Interp::VariancePreserving;
-        for (layer, o) in self.layers.iter().zip(&self.origin) {
+        for (i, (layer, o)) in self.layers.iter().zip(&self.origin).enumerate() {
             let inv = layer.inv_dx();
             let px = std::array::from_fn(|l| o[0] + u[l] as f64 * inv);
             let pz = std::array::from_fn(|l| o[1] + v[l] as f64 * inv);
-            layer.add_bilinear_lanes(&px, &pz, count, preserve, &mut sum);
+            match weights {
+                None => layer.add_bilinear_lanes(&px, &pz, count, preserve, &mut sum),
+                Some(w) => {
+                    if w.iter().all(|w| w[i] == 0.0) {
+                        continue;
+                    }
+                    let mut t = [[0.0f32; FIELD_COUNT]; LANES];
+                    layer.add_bilinear_lanes(&px, &pz, count, preserve, &mut t);
+                    for ((s, t), w) in sum.iter_mut().zip(&t).zip(w) {
+                        add_texel(s, &t.map(|x| x * w[i]));
+                    }
+                }
+            }
         }
         for (n, s) in out.iter_mut().zip(&sum) {
             *n = normal_from_slopes(slopes(s)).0;
