@@ -8,6 +8,7 @@ mod defects;
 #[cfg(feature = "embree")]
 mod embree;
 mod estimator;
+mod filtered;
 mod frames;
 mod lod;
 mod passes;

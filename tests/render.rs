@@ -60,6 +60,8 @@ fn scene_ref<'a>(
         skip_above_y: None,
         predict_camera_hits: false,
         ocean: Some(sampler),
+        slopes: None,
+        sun: None,
         earth_radius_m,
         sky,
     }
@@ -366,6 +368,8 @@ fn skipping_rays_that_cannot_return_changes_no_pixel() {
             predict_camera_hits: false,
             accel: accel.as_ref(),
             ocean: Some(sampler),
+            slopes: None,
+            sun: None,
             earth_radius_m: 6_371_000.0,
             sky: &sky,
         };

@@ -265,6 +265,13 @@ pub fn merge(job: &MergeJob) -> Result<RenderReport, AppError> {
     let film = Film::from_states(r.width, r.height, samples_per_pixel, &states);
     r.noise_rms = film.noise_rms();
     r.noise_rms_relative = film.noise_rms().map(|v| v / mean_luminance(&film.image));
+    let camera = crate::render::Camera::new(
+        r.config.camera.projection,
+        r.config.camera.width,
+        r.config.camera.aspect,
+    );
+    let sea = film.noise_rms_sea(&camera);
+    (r.noise_rms_sea, r.noise_rms_sea_relative) = (sea.map(|n| n.0), sea.map(|n| n.1));
     r.exr = exr.clone();
     r.png = png.clone();
     r.json = json.clone();

@@ -143,6 +143,13 @@ impl fmt::Display for RenderReport {
         if let (Some(n), Some(r)) = (self.noise_rms, self.noise_rms_relative) {
             writeln!(f, "  {}", noise_line(n, r, self.spp))?;
         }
+        if let (Some(n), Some(r)) = (self.noise_rms_sea, self.noise_rms_sea_relative) {
+            writeln!(
+                f,
+                "  noise on the sea (pixels below the horizon): {:.1}% of the sea's mean (RMS standard error {n:.2e})",
+                100.0 * r
+            )?;
+        }
         writeln!(
             f,
             "  NaN samples {}, wrong-side directions {}, truncated paths {}, camera rays escaping below the horizon {}",

@@ -192,9 +192,20 @@ pub struct RenderArgs {
     /// Tessellation: the paper's presets, or chosen from the pixel footprint.
     #[arg(long, value_parser = choice::<LodChoice>())]
     lod: Option<LodChoice>,
-    /// Shading normals: interpolated vertex normals, or recomputed from the ocean (normal mapping).
+    /// Shading normals: interpolated vertex normals, recomputed from the ocean (normal mapping,
+    /// the paper's), or filtered: the waves below the pixel's footprint as a rough surface, with
+    /// the sun sampled (docs/filtered.md).
     #[arg(long, value_parser = choice::<NormalMode>())]
     normals: Option<NormalMode>,
+    /// Filtered normals: the std of the Gaussian the waves are seen through, in pixel
+    /// footprints (default 0.2887, a pixel's box; larger = less noise, less detail).
+    #[arg(long)]
+    filter_width: Option<f32>,
+    /// Filtered normals: the lobe of the waves below the footprint: `mapped` draws them as the
+    /// pixel's own points would have them and shades them as mapped normals (the paper's
+    /// image, less noise), `smith` is the microfacet model with Smith's masking.
+    #[arg(long, value_parser = choice::<vastocean::config::FilterLobe>())]
+    filter_lobe: Option<vastocean::config::FilterLobe>,
     /// Render only the elevations TOP:BOTTOM in degrees, e.g. +1:-6 (equirectangular camera).
     #[arg(long, value_parser = parse_band, allow_hyphen_values = true)]
     band: Option<(f64, f64)>,
@@ -264,6 +275,8 @@ impl RenderArgs {
         let mut cfg = self.scene.scene()?;
         cfg.lod.preset = self.lod.unwrap_or(cfg.lod.preset);
         cfg.render.normals = self.normals.unwrap_or(cfg.render.normals);
+        cfg.render.filter_width = self.filter_width.unwrap_or(cfg.render.filter_width);
+        cfg.render.filter_lobe = self.filter_lobe.unwrap_or(cfg.render.filter_lobe);
         if let Some(b) = self.band {
             let Projection::Equirect { .. } = cfg.camera.projection else {
                 return Err(

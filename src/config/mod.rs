@@ -21,7 +21,7 @@ use thiserror::Error;
 pub use camera::{CameraConfig, Projection};
 pub use lod::{LodChoice, LodConfig, Pattern, Reading};
 pub use ocean::OceanParams;
-pub use render::{Backend, NormalMode, RenderConfig, Water, WrongSide};
+pub use render::{Backend, FilterLobe, NormalMode, RenderConfig, Water, WrongSide};
 pub use sky::{AnalyticSky, SkyConfig};
 
 #[derive(Debug, Error)]
@@ -269,6 +269,13 @@ impl SceneConfig {
         if !(1..=1_000_000).contains(&r.spp) {
             return Err(invalid("render.spp", "in 1..=1000000", r.spp));
         }
+        if !(r.filter_width > 0.0 && r.filter_width <= 16.0) {
+            return Err(invalid(
+                "render.filter_width",
+                "in (0, 16] ray-cone widths",
+                r.filter_width,
+            ));
+        }
         if !(1..=64).contains(&r.max_segments) {
             return Err(invalid("render.max_segments", "in 1..=64", r.max_segments));
         }
@@ -495,6 +502,7 @@ mod tests {
         names_agree::<NormalMode>();
         names_agree::<Backend>();
         names_agree::<WrongSide>();
+        names_agree::<FilterLobe>();
         names_agree::<ocean::SpectrumKind>();
         names_agree::<ocean::SpreadingKind>();
         names_agree::<ocean::Interp>();

@@ -12,9 +12,30 @@ pub enum NormalMode {
     /// Eq. 7 from the ocean layers at the interpolated texture coordinate.
     #[default]
     Mapped,
+    /// Beyond the paper: the waves the ray's footprint resolves give the mapped normal; the
+    /// waves below it are a Gaussian slope distribution (a rough dielectric) whose covariance
+    /// is the realization's own, with the sun sampled at every rough hit (docs/filtered.md).
+    Filtered,
 }
 
-super::choice!(NormalMode { Vertex => "vertex", Mapped => "mapped" });
+super::choice!(NormalMode { Vertex => "vertex", Mapped => "mapped", Filtered => "filtered" });
+
+/// Which lobe filtered normals give the waves below the footprint (docs/filtered.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum FilterLobe {
+    /// Normals drawn by area from the unresolved slopes, as the points of a pixel have them,
+    /// each shaded as a mapped normal is (the same Fresnel split and wrong-side policy): the
+    /// mapped render's own statistics, so it converges to the same image.
+    #[default]
+    Mapped,
+    /// Visible normals with Smith's masking (Walter et al. 2007; Heitz 2014): the microfacet
+    /// model of a rough surface, which loses the light masked at grazing angles that mapped
+    /// normals keep.
+    Smith,
+}
+
+super::choice!(FilterLobe { Mapped => "mapped", Smith => "smith" });
 
 /// What the integrator does when the shading normal disagrees with the triangle it shades:
 /// when it faces away from the incoming ray, or would send the reflected or refracted ray to
@@ -75,6 +96,13 @@ pub struct RenderConfig {
     /// Worker threads for tessellation, Embree and tracing (0 = all cores).
     pub threads: usize,
     pub normals: NormalMode,
+    /// Filtered normals: the std of the Gaussian footprint the waves are seen through, in ray
+    /// cone widths (a pixel's width at the hit). The default, 1 / sqrt(12), is the std of the
+    /// pixel's own box; wider filters more of the waves into the rough lobe (less noise, less
+    /// sub-pixel detail), narrower fewer (docs/filtered.md).
+    pub filter_width: f32,
+    /// Filtered normals: the lobe of the waves below the footprint.
+    pub filter_lobe: FilterLobe,
     /// Most segments (rays) in one path (the paper: 10).
     pub max_segments: u32,
     /// Hits up to this depth branch into both reflection and refraction; deeper ones choose one.
@@ -96,6 +124,8 @@ impl Default for RenderConfig {
             ocean_seed: 1,
             threads: 0,
             normals: NormalMode::Mapped,
+            filter_width: FILTER_WIDTH_BOX,
+            filter_lobe: FilterLobe::Mapped,
             max_segments: 10,
             branch_depth: 3,
             backend: Backend::default(),
@@ -104,6 +134,9 @@ impl Default for RenderConfig {
         }
     }
 }
+
+/// The std of a pixel's box in its widths, 1 / sqrt(12): the default `render.filter_width`.
+pub const FILTER_WIDTH_BOX: f32 = 0.288_675_13;
 
 /// Optical properties of the water.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

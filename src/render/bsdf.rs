@@ -1,29 +1,53 @@
 //! The water interface at a hit as the integrator uses it: the interface's normals, the
-//! Fresnel weight, and the reflected and refracted directions leaving it (the paper's delta
-//! Fresnel split), with the wrong-side policy applied; and which branches a path follows.
+//! Fresnel weight, and the reflected and refracted directions leaving it, with the wrong-side
+//! policy applied; and which branches a path follows.
+//!
+//! A smooth hit (vertex and mapped normals, or a filtered hit whose footprint resolves every
+//! wave) is the paper's delta Fresnel split about the shading normal. A rough hit (filtered
+//! normals, waves below the footprint) first draws a microfacet normal m from the visible
+//! normals of the unresolved slopes around the resolved normal ([`Lobe`]), then splits about m:
+//! reflection weighted F(m) G1(r), refraction (1 - F(m)) G1(t), Smith's estimator for a
+//! visible-normal sample (Heitz 2014). Seen from the air, a rough hit also samples the sun's
+//! disc (next-event estimation): its direct reflection is weighted by the power heuristic
+//! against the reflection's own density, and the reflected ray carries that density so that
+//! the sun it finds by itself gets the complementary weight ([`PathVertex::sun_pdf`]).
 
 use glam::Vec3;
 
 use super::counters::Counters;
 use super::integrator::{SceneRef, TraceSettings};
 use super::interface::{SurfacePoint, bend_normal, keep_side, surface_point};
+use super::microfacet::{Lobe, power_heuristic};
 use super::water::{fresnel, reflect, refract};
-use crate::accel::Hit;
-use crate::config::WrongSide;
+use crate::accel::{Hit, Ray};
+use crate::config::{FilterLobe, WrongSide};
 use crate::rng::Rng;
 
 /// What one hit does to a path: where it is, which way the medium changes, the attenuation of
-/// the segment that reached it, and the two directions leaving it with the Fresnel weight.
+/// the segment that reached it, and the two directions leaving it with their weights.
 #[derive(Clone, Copy)]
 pub(super) struct Scatter {
     pub(super) sp: SurfacePoint,
     pub(super) from_below: bool,
     pub(super) attenuation: Vec3,
+    /// The Fresnel reflectance (at the microfacet normal on a rough hit).
     pub(super) fresnel: f32,
-    /// `None`: the wrong-side policy ended this branch.
+    /// `None`: the wrong-side policy ended this branch, or (rough) it left below the resolved
+    /// surface, where masking gives it no weight.
     pub(super) reflected: Option<Vec3>,
-    /// `None` on total internal reflection; `Some(None)` when the policy ended the branch.
+    /// `None` on total internal reflection; `Some(None)` when the branch ended.
     pub(super) refracted: Option<Option<Vec3>>,
+    /// Smith's masking of the reflected and refracted directions (1 on a smooth hit).
+    pub(super) g_reflected: f32,
+    pub(super) g_refracted: f32,
+    /// The footprint's width at the hit, m: where the rays leaving it start.
+    pub(super) width_m: f32,
+    /// The reflected ray's density where the sun was sampled here (for the weight of the sun
+    /// it finds); 0 where it was not, and the sun is seen at full weight.
+    pub(super) sun_pdf: f32,
+    /// The sun's sampled direct light: the shadow ray that must reach the sky, and the
+    /// radiance it brings (weighted) if it does.
+    pub(super) sun: Option<(Ray, Vec3)>,
 }
 
 impl Scatter {
@@ -40,19 +64,39 @@ impl Scatter {
         fresnel: 0.0,
         reflected: None,
         refracted: None,
+        g_reflected: 1.0,
+        g_refracted: 1.0,
+        width_m: 0.0,
+        sun_pdf: 0.0,
+        sun: None,
     };
 }
 
+/// What the shading stage knows of a hit besides the hit itself.
+#[derive(Clone, Copy)]
+pub(super) struct HitShading {
+    /// The shading normal, air side up.
+    pub(super) normal: Vec3,
+    /// The unresolved waves' slope covariance (filtered normals), or zero.
+    pub(super) cov: [f32; 3],
+    /// The footprint's width at the hit, m.
+    pub(super) width_m: f32,
+    /// The path's segment (its depth) at this hit.
+    pub(super) segment: u32,
+}
+
 impl SceneRef<'_> {
-    /// Shading at a hit of a ray travelling along `d`, whose shading normal (air side up) is
-    /// `shading` ([`Self::shading_normals`]): the interface's normals, the Fresnel weight and
-    /// the reflected and refracted directions.
+    /// Shading at a hit of a ray travelling along `d` ([`HitShading`] from
+    /// [`Self::shading_normals`]): the interface's normals, the Fresnel weight, the reflected
+    /// and refracted directions, and on a rough hit the sampled sun. A rough hit draws its
+    /// random numbers from `rng` (the path's own); a smooth one draws none.
     pub(super) fn scatter(
         &self,
         d: Vec3,
         hit: &Hit,
-        shading: Vec3,
+        shading: HitShading,
         settings: &TraceSettings,
+        rng: &mut Rng,
         c: &mut Counters,
     ) -> Scatter {
         let sp = surface_point(self.accel.mesh(), hit);
@@ -64,7 +108,7 @@ impl SceneRef<'_> {
         };
 
         // Shading normal facing the incoming ray, and the geometric one likewise.
-        let mut ns = shading;
+        let mut ns = shading.normal;
         let (ng, eta_i, eta_t) = if from_below {
             (-sp.ng, settings.water.ior, 1.0)
         } else {
@@ -73,10 +117,28 @@ impl SceneRef<'_> {
         if from_below {
             ns = -ns;
         }
+        let mut s = Scatter {
+            sp,
+            from_below,
+            attenuation,
+            width_m: shading.width_m,
+            ..Scatter::NONE
+        };
+        // The unresolved waves around the resolved normal (filtered normals), and for the
+        // `mapped` lobe a normal drawn from them by area, as a point of the pixel would have
+        // it, shaded from here on exactly as a mapped normal is.
+        let lobe = Lobe::new(ns, shading.cov);
+        let area_lobe = lobe.filter(|_| settings.filter_lobe == FilterLobe::Mapped);
+        if let Some(lobe) = &area_lobe {
+            c.rough_hits += 1;
+            ns = lobe.world(lobe.sample_area(rng.f32(), rng.f32()), false);
+        }
         let policy = settings.wrong_side;
         let mut dead = false;
+        let mut modified = false;
         if d.dot(ns) >= 0.0 {
             c.backfacing_shading += 1;
+            modified = true;
             match policy {
                 WrongSide::Mirror => ns = ng,
                 WrongSide::Flip => ns = -ns,
@@ -88,33 +150,239 @@ impl SceneRef<'_> {
         if policy == WrongSide::Bend {
             let bent = bend_normal(ng, -d, ns);
             c.bent += u64::from(bent != ns);
+            modified |= bent != ns;
             ns = bent;
         }
-        let cos_i = -d.dot(ns);
-        let fresnel = fresnel(cos_i, eta_i, eta_t);
-        let (reflected, refracted) = if dead {
+        if dead {
             c.terminated += 1;
-            (None, Some(None))
+            s.refracted = Some(None);
+            return s;
+        }
+        let smith = lobe
+            .filter(|_| settings.filter_lobe == FilterLobe::Smith)
+            .and_then(|_| Lobe::new(ns, shading.cov));
+        let Some(lobe) = smith else {
+            s.fresnel = fresnel(-d.dot(ns), eta_i, eta_t);
+            let r = reflect(d, ns);
+            s.reflected = keep_side(r, ng, true, policy, c);
+            s.refracted = refract(d, ns, eta_i / eta_t).map(|t| keep_side(t, ng, false, policy, c));
+            if let Some(lobe) = area_lobe {
+                // (A reflection the policy mirrored back above the triangle is the folded
+                // lobe's, whose density the sun's weight accounts for.)
+                let unmodified = s.reflected.filter(|_| !modified);
+                self.sample_sun_area(&mut s, &lobe, d, ng, unmodified, shading, settings, rng, c);
+            }
+            return s;
+        };
+        self.scatter_smith(
+            &mut s,
+            &lobe,
+            d,
+            ng,
+            (eta_i, eta_t),
+            shading,
+            settings,
+            rng,
+            c,
+        );
+        s
+    }
+
+    /// The `mapped` lobe's sun: the reflection BSDF of normals drawn by area from `lobe` is
+    /// F(h) D(h) h.z / (4 wo.h) for the directions whose normal h the wrong-side policy leaves
+    /// alone; a reflection below the triangle is mirrored back above it (policies `mirror` and
+    /// `flip`), so there the lobe is folded: a direction's density and BSDF are its own plus
+    /// its mirror image's. What the policy changes otherwise (a normal facing away, a bent
+    /// one) reaches the sky through the BSDF's samples only, at full weight. The reflected ray
+    /// `unmodified` (its normal untouched by the policy) carries its density for the weight of
+    /// the sun it may meet. Seen from the air only.
+    #[allow(clippy::too_many_arguments)]
+    fn sample_sun_area(
+        &self,
+        s: &mut Scatter,
+        lobe: &Lobe,
+        d: Vec3,
+        ng: Vec3,
+        unmodified: Option<Vec3>,
+        shading: HitShading,
+        settings: &TraceSettings,
+        rng: &mut Rng,
+        c: &mut Counters,
+    ) {
+        let Some(sun) = self.sun.filter(|_| !s.from_below) else {
+            return;
+        };
+        let (eta_i, eta_t) = (1.0, settings.water.ior);
+        let wo = -d;
+        let both = shading.segment < settings.branch_depth;
+        let policy = settings.wrong_side;
+        let folds = matches!(policy, WrongSide::Mirror | WrongSide::Flip);
+        // The lowest reflection the policy leaves alone.
+        let lowest = if policy == WrongSide::Bend {
+            (0.9 * ng.dot(wo)).min(0.01)
         } else {
+            0.0
+        };
+        // (density, BSDF x cosine) of reflecting wo into w by a front-facing normal
+        let lobe_at = |w: Vec3| {
+            let h = (wo + w).normalize_or_zero();
+            let c = wo.dot(h);
+            let (hl, below) = lobe.local(h);
+            if c <= 0.0 || below {
+                return (0.0, 0.0);
+            }
+            let f = fresnel(c, eta_i, eta_t);
+            let density = lobe.d(hl) * hl.z / (4.0 * c);
+            (if both { 1.0 } else { f } * density, f * density)
+        };
+        let at = |w: Vec3| {
+            let e = ng.dot(w);
+            if e < lowest || e <= 0.0 {
+                return (0.0, 0.0);
+            }
+            let (p, f) = lobe_at(w);
+            if folds {
+                let (pm, fm) = lobe_at(w - 2.0 * e * ng);
+                (p + pm, f + fm)
+            } else {
+                (p, f)
+            }
+        };
+        if let Some(r) = unmodified.filter(|&r| sun.near(r)) {
+            s.sun_pdf = at(r).0;
+        }
+        c.sun_samples += 1;
+        let sample = sun.sample(s.sp.p, rng.f32(), rng.f32());
+        if sample.pdf == 0.0 {
+            return;
+        }
+        let (p_bsdf, f_cos) = at(sample.d);
+        if f_cos > 0.0 {
+            let weight = power_heuristic(sample.pdf, p_bsdf);
+            let light = sun.radiance(&sample) * (f_cos * weight / sample.pdf);
+            if light != Vec3::ZERO {
+                s.sun = Some((s.sp.spawn(sample.d), light));
+            }
+        }
+    }
+
+    /// The `smith` lobe around the shading normal: a visible microfacet normal, the split about
+    /// it weighted by Smith's masking, and the sun sampled against the folded lobe.
+    #[allow(clippy::too_many_arguments)]
+    fn scatter_smith(
+        &self,
+        s: &mut Scatter,
+        lobe: &Lobe,
+        d: Vec3,
+        ng: Vec3,
+        (eta_i, eta_t): (f32, f32),
+        shading: HitShading,
+        settings: &TraceSettings,
+        rng: &mut Rng,
+        c: &mut Counters,
+    ) {
+        let policy = settings.wrong_side;
+        c.rough_hits += 1;
+        let (wo, _) = lobe.local(-d);
+        let m_local = lobe.sample_visible(wo, rng.f32(), rng.f32());
+        let m = lobe.world(m_local, false);
+        s.fresnel = fresnel(wo.dot(m_local), eta_i, eta_t);
+        // Masking: a direction below the resolved surface has no weight.
+        let r = reflect(d, m);
+        let (r_local, r_below) = lobe.local(r);
+        if !r_below {
+            s.g_reflected = lobe.g1(r_local);
+            s.reflected = keep_side(r, ng, true, policy, c);
+        }
+        s.refracted = match refract(d, m, eta_i / eta_t) {
+            None => None,
+            Some(t) => {
+                let (t_local, t_below) = lobe.local(t);
+                s.g_refracted = lobe.g1(t_local);
+                Some(if t_below {
+                    keep_side(t, ng, false, policy, c)
+                } else {
+                    None
+                })
+            }
+        };
+
+        // The sun, seen from the air. The lobe the reflection actually follows is folded: a
+        // direction below the triangle is mirrored back above it by the wrong-side policy
+        // (but for `terminate`), so both the density of a direction w above the triangle and
+        // the BSDF the sun is reflected by are the lobe's at w plus its at w's mirror image.
+        // Past `branch_depth` the reflection is followed with probability F: its density
+        // carries that factor.
+        let Some(sun) = self.sun.filter(|_| !s.from_below) else {
+            return;
+        };
+        let both = shading.segment < settings.branch_depth;
+        let folds = policy != WrongSide::Terminate;
+        let mirror = |w: Vec3| w - 2.0 * w.dot(ng) * ng;
+        // (density, BSDF x cosine) of the lobe itself at world direction w
+        let lobe_at = |w: Vec3| {
+            let (wi, below) = lobe.local(w);
+            if below {
+                return (0.0, 0.0);
+            }
+            let h = (wo + wi).normalize_or_zero();
+            let f = fresnel(wo.dot(h), eta_i, eta_t);
+            let choice = if both { 1.0 } else { f };
             (
-                keep_side(reflect(d, ns), ng, true, policy, c),
-                refract(d, ns, eta_i / eta_t).map(|t| keep_side(t, ng, false, policy, c)),
+                choice * lobe.reflection_pdf(wo, wi),
+                lobe.reflection_cos(wo, wi, f),
             )
         };
-        Scatter {
-            sp,
-            from_below,
-            attenuation,
-            fresnel,
-            reflected,
-            refracted,
+        let folded_at = |w: Vec3| {
+            let (p, f) = lobe_at(w);
+            if folds {
+                let (pm, fm) = lobe_at(mirror(w));
+                (p + pm, f + fm)
+            } else {
+                (p, f)
+            }
+        };
+        // (Only a reflection that may meet the sun needs its density.)
+        if let Some(w) = s.reflected.filter(|&w| sun.near(w)) {
+            s.sun_pdf = folded_at(w).0;
+        }
+        c.sun_samples += 1;
+        let sample = sun.sample(s.sp.p, rng.f32(), rng.f32());
+        let (ws, p_sun) = (sample.d, sample.pdf);
+        if ws.dot(ng) <= 0.0 || p_sun == 0.0 {
+            return;
+        }
+        let (p_bsdf, f_cos) = folded_at(ws);
+        if f_cos > 0.0 {
+            let weight = power_heuristic(p_sun, p_bsdf);
+            let light = sun.radiance(&sample) * (f_cos * weight / p_sun);
+            if light != Vec3::ZERO {
+                s.sun = Some((s.sp.spawn(ws), light));
+            }
+        }
+    }
+
+    /// The radiance `l` a ray from `org` along `d` brings from the sky, with the sun's part
+    /// weighted as multiple importance sampling wants when the ray left a rough hit that
+    /// sampled the sun (`sun_pdf` > 0: the density with which that hit chose `d`).
+    pub(super) fn weigh_sun(&self, org: Vec3, d: Vec3, sun_pdf: f32, l: Vec3) -> Vec3 {
+        match self.sun {
+            Some(sun) if sun_pdf > 0.0 => {
+                let (p, radiance) = sun.seen(org, d);
+                if p == 0.0 {
+                    return l;
+                }
+                l - (1.0 - power_heuristic(sun_pdf, p)) * radiance
+            }
+            _ => l,
         }
     }
 }
 
-/// A branch leaving a hit: its direction and whether it travels in the water (`None`: not
-/// followed, radiance zero).
-pub(super) type Branch = Option<(Vec3, bool)>;
+/// A branch leaving a hit: its direction, whether it travels in the water, its weight besides
+/// Fresnel's (Smith's masking on a rough hit) and the density the sun it finds is weighed with
+/// (`None`: not followed, radiance zero).
+pub(super) type Branch = Option<(Vec3, bool, f32, f32)>;
 
 /// The branches a hit at `segment` follows, first then second, and whether both are (then F
 /// and 1 - F weigh them; otherwise the first carries the whole radiance): the reflection alone
@@ -127,8 +395,10 @@ pub(super) fn branches(
     settings: &TraceSettings,
     rng: &mut Rng,
 ) -> (Branch, Branch, bool) {
-    let reflected = s.reflected.map(|w| (w, s.from_below));
-    let refracted = |t: Option<Vec3>| t.map(|w| (w, !s.from_below));
+    let reflected = s
+        .reflected
+        .map(|w| (w, s.from_below, s.g_reflected, s.sun_pdf));
+    let refracted = |t: Option<Vec3>| t.map(|w| (w, !s.from_below, s.g_refracted, 0.0));
     match s.refracted {
         None => (reflected, None, false),
         Some(t) if segment < settings.branch_depth => (reflected, refracted(t), true),

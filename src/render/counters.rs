@@ -67,6 +67,18 @@ pub struct Counters {
     pub normal_timed_twice_ns: u64,
     #[serde(default)]
     pub normal_timed_twice_points: u64,
+    /// Filtered normals: hits shaded with a rough lobe (the rest resolve every wave), the
+    /// sun sampled at those hits (`sun_samples`), the shadow rays traced for them
+    /// (`sun_rays`; the rest rose clear of the mesh) and those the sea blocked. Absent from
+    /// pass files written before them.
+    #[serde(default)]
+    pub rough_hits: u64,
+    #[serde(default)]
+    pub sun_samples: u64,
+    #[serde(default)]
+    pub sun_rays: u64,
+    #[serde(default)]
+    pub sun_occluded: u64,
 }
 
 impl std::ops::AddAssign for Counters {
@@ -94,6 +106,10 @@ impl std::ops::AddAssign for Counters {
         self.normal_timed_twice += o.normal_timed_twice;
         self.normal_timed_twice_ns += o.normal_timed_twice_ns;
         self.normal_timed_twice_points += o.normal_timed_twice_points;
+        self.rough_hits += o.rough_hits;
+        self.sun_samples += o.sun_samples;
+        self.sun_rays += o.sun_rays;
+        self.sun_occluded += o.sun_occluded;
     }
 }
 

@@ -124,6 +124,29 @@ impl Film {
             .collect()
     }
 
+    /// [`Film::noise_rms`] over the pixels whose centre looks below the horizon (the sea), and
+    /// that over the sea's mean luminance; `None` with fewer than two samples per pixel or no
+    /// such pixel.
+    pub fn noise_rms_sea(&self, camera: &Camera) -> Option<(f64, f64)> {
+        if self.spp < 2 {
+            return None;
+        }
+        let w = self.image.width;
+        let (mut var, mut lum, mut n) = (0.0f64, 0.0f64, 0usize);
+        for (i, (&v, &p)) in self.var_y.iter().zip(&self.image.pixels).enumerate() {
+            let (x, y) = (i % w, i / w);
+            if camera.direction(x as f32 + 0.5, y as f32 + 0.5).y < 0.0 {
+                var += v as f64;
+                lum += crate::color::luminance(p) as f64;
+                n += 1;
+            }
+        }
+        (n > 0).then(|| {
+            let rms = (var / n as f64).sqrt();
+            (rms, rms / (lum / n as f64).max(1e-30))
+        })
+    }
+
     /// RMS over the image of the standard error of the pixel luminance, or `None` with fewer
     /// than two samples per pixel.
     pub fn noise_rms(&self) -> Option<f64> {
@@ -361,6 +384,11 @@ pub fn render_image_samples(
     keep_states: bool,
     progress: bool,
 ) -> (Film, Vec<PixelState>, Counters) {
+    // Footprints spread from the camera's pixels.
+    let settings = &TraceSettings {
+        pixel_spread_rad: camera.pixel_spread_rad(),
+        ..*settings
+    };
     // Samples are dealt into k sequences whatever is kept, so an image does not depend on
     // whether batch means were asked for.
     let k = MAX_BATCHES;

@@ -20,16 +20,18 @@
 use glam::Vec3;
 use serde::Serialize;
 
-use super::bsdf::{Scatter, branches};
+use super::bsdf::{HitShading, Scatter, branches};
 pub use super::counters::Counters;
 pub use super::earth_tilt::{tilt_to_earth, tilt_to_earth_many};
+use super::footprint;
 pub use super::interface::{bend_normal, spawn_ray};
 pub use super::shortcuts::{highest_vertex_y, hit_on_triangle, max_slope};
 use crate::accel::{Accel, Hit, Ray};
-use crate::config::{NormalMode, SceneConfig, Water, WrongSide};
+use crate::config::{FilterLobe, NormalMode, SceneConfig, Water, WrongSide};
 use crate::ocean::Sampler;
+use crate::ocean::slopes::SurfaceSlopes;
 use crate::rng::Rng;
-use crate::sky::Sky;
+use crate::sky::{Sky, SunLight};
 
 /// Path-tracing settings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -47,6 +49,14 @@ pub struct TraceSettings {
     /// A camera ray with a direction's y below this must meet the sea (it dips under the
     /// horizon of the deepest troughs); one that escapes counts as a hole. -1 = never counted.
     pub must_hit_below_y: f32,
+    /// The angle one pixel spans, radians: a camera ray's footprint grows by it per metre
+    /// travelled ([`super::footprint`]). Set from the camera by the film; 0 = a footprint of
+    /// zero width, under which filtered normals resolve every wave.
+    pub pixel_spread_rad: f32,
+    /// Filtered normals: the Gaussian footprint's std in cone widths (`render.filter_width`).
+    pub filter_width: f32,
+    /// Filtered normals: the lobe of the unresolved waves (`render.filter_lobe`).
+    pub filter_lobe: FilterLobe,
 }
 
 impl Default for TraceSettings {
@@ -67,6 +77,9 @@ impl TraceSettings {
             wrong_side: scene.render.wrong_side,
             upwelling: scene.water.upwelling(sky_irradiance).to_array(),
             must_hit_below_y: -1.0,
+            pixel_spread_rad: 0.0,
+            filter_width: scene.render.filter_width,
+            filter_lobe: scene.render.filter_lobe,
         }
     }
 }
@@ -92,8 +105,12 @@ pub struct SceneRef<'a> {
     /// holds their closest hit ([`SceneRef::predict_camera_prim`]; needs `skip_slope`). The
     /// hits differ from the BVH's by rounding.
     pub predict_camera_hits: bool,
-    /// The ocean, for mapped normals (required for `NormalMode::Mapped`).
+    /// The ocean, for mapped and filtered normals (required for both).
     pub ocean: Option<Sampler<'a>>,
+    /// The ocean's slope covariance by band, for filtered normals (required for them).
+    pub slopes: Option<&'a SurfaceSlopes>,
+    /// The sky's sun, sampled at rough hits of filtered normals (`None`: found by chance).
+    pub sun: Option<SunLight>,
     pub earth_radius_m: f64,
     pub sky: &'a Sky,
 }
@@ -101,13 +118,25 @@ pub struct SceneRef<'a> {
 impl SceneRef<'_> {
     /// The shading normal `mode` gives at a hit (air side up), for tests and cross-checks.
     pub fn normal_at(&self, hit: &Hit, mode: NormalMode) -> Vec3 {
+        self.filtered_normal_at(hit, 0.0, mode).0
+    }
+
+    /// The shading normal `mode` gives at a hit whose footprint is `width_m` across, and the
+    /// slope covariance filtered normals leave unresolved there (zero for the other modes).
+    pub fn filtered_normal_at(
+        &self,
+        hit: &Hit,
+        width_m: f32,
+        mode: NormalMode,
+    ) -> (Vec3, [f32; 3]) {
         let settings = TraceSettings {
             normals: mode,
             ..TraceSettings::default()
         };
-        let mut n = [Vec3::Y];
-        self.shading_normals(&[Some(*hit)], &settings, &mut Counters::default(), &mut n);
-        n[0]
+        let (mut n, mut cov) = ([Vec3::Y], [[0.0; 3]]);
+        let c = &mut Counters::default();
+        self.shading_normals(&[Some(*hit)], &[width_m], &settings, c, &mut n, &mut cov);
+        (n[0], cov[0])
     }
 
     /// Radiance arriving at `ray.org` along `-ray.dir`. `in_water`: the ray travels in the sea.
@@ -126,6 +155,8 @@ impl SceneRef<'_> {
             sample: 0,
             parent: None,
             in_water,
+            width_m: 0.0,
+            sun_pdf: 0.0,
         };
         let mut out = [Vec3::ZERO];
         self.radiance_batch(
@@ -191,6 +222,8 @@ impl SceneRef<'_> {
                 sample: i as u8,
                 parent: None,
                 in_water: false,
+                width_m: 0.0,
+                sun_pdf: 0.0,
             };
         }
         self.radiance_batch(&entries[..n], predicted, 0, settings, rngs, c, out);
@@ -249,7 +282,8 @@ impl SceneRef<'_> {
             let (orgs, dirs) = (&sky_org[..n_sky], &sky_dir[..n_sky]);
             self.sky.radiance_many(orgs, dirs, &mut l[..n_sky]);
             for (&k, l) in sky_entry[..n_sky].iter().zip(l) {
-                out[k as usize] = l;
+                let e = &entries[k as usize];
+                out[k as usize] = self.weigh_sun(e.ray.org.into(), e.ray.dir.into(), e.sun_pdf, l);
             }
         }
         if m == 0 {
@@ -292,25 +326,51 @@ impl SceneRef<'_> {
         }
 
         // Shading at every hit, its normal computed with the others'; what a miss sees.
+        let mut widths = [0.0f32; CAMERA_BATCH];
+        for ((w, &k), hit) in widths.iter_mut().zip(&traced_entry[..m]).zip(&hits[..m]) {
+            if let Some(hit) = hit {
+                *w = footprint::width_at(entries[k as usize].width_m, settings, hit.t);
+            }
+        }
         let mut normals = [Vec3::Y; CAMERA_BATCH];
-        self.shading_normals(&hits[..m], settings, c, &mut normals[..m]);
+        let mut covs = [[0.0f32; 3]; CAMERA_BATCH];
+        self.shading_normals(
+            &hits[..m],
+            &widths[..m],
+            settings,
+            c,
+            &mut normals[..m],
+            &mut covs[..m],
+        );
         let mut shaded = [(0u8, Scatter::NONE); CAMERA_BATCH];
         let mut n_shaded = 0;
-        for ((&k, hit), ns) in traced_entry[..m].iter().zip(&hits[..m]).zip(normals) {
+        for (i, (&k, hit)) in traced_entry[..m].iter().zip(&hits[..m]).enumerate() {
             let e = &entries[k as usize];
             match hit {
-                None => out[k as usize] = self.miss(&e.ray, e.in_water, segment, settings, c),
+                None => {
+                    let l = self.miss(&e.ray, e.in_water, segment, settings, c);
+                    out[k as usize] =
+                        self.weigh_sun(e.ray.org.into(), e.ray.dir.into(), e.sun_pdf, l);
+                }
                 Some(hit) => {
                     c.hits += 1;
                     // A planar triangle cannot meet a ray leaving it twice: this is rounding.
                     c.self_hits += u64::from(e.parent == Some(hit.prim));
                     let d = Vec3::from(e.ray.dir);
-                    shaded[n_shaded] = (k, self.scatter(d, hit, ns, settings, c));
+                    let shading = HitShading {
+                        normal: normals[i],
+                        cov: covs[i],
+                        width_m: widths[i],
+                        segment,
+                    };
+                    let rng = &mut rngs[e.sample as usize];
+                    shaded[n_shaded] = (k, self.scatter(d, hit, shading, settings, rng, c));
                     n_shaded += 1;
                 }
             }
         }
         let shaded = &shaded[..n_shaded];
+        let direct = self.sun_through(shaded, c);
 
         // The branches: which each hit follows (drawing a sample's random choice here, before
         // its subtrees), then each batch of branches in turn.
@@ -328,12 +388,14 @@ impl SceneRef<'_> {
             let mut of = [0u8; CAMERA_BATCH];
             let mut b = 0;
             for (j, (k, s)) in shaded.iter().enumerate() {
-                if let Some((w, in_water)) = dirs[j] {
+                if let Some((w, in_water, _, sun_pdf)) = dirs[j] {
                     batch[b] = PathVertex {
                         ray: s.sp.spawn(w),
                         sample: entries[*k as usize].sample,
                         parent: Some(s.sp.prim),
                         in_water,
+                        width_m: s.width_m,
+                        sun_pdf,
                     };
                     of[b] = j as u8;
                     b += 1;
@@ -351,7 +413,8 @@ impl SceneRef<'_> {
                     &mut lb[..b],
                 );
                 for (&j, lb) in of[..b].iter().zip(lb) {
-                    l[j as usize] = lb;
+                    let masking = dirs[j as usize].map_or(1.0, |b| b.2);
+                    l[j as usize] = masking * lb;
                 }
             }
         }
@@ -361,8 +424,45 @@ impl SceneRef<'_> {
             } else {
                 l_first[j]
             };
-            out[*k as usize] = s.attenuation * l;
+            out[*k as usize] = s.attenuation * (l + direct[j]);
         }
+    }
+
+    /// The sun light sampled at the `shaded` hits that reach the sky: their shadow rays traced
+    /// together (those rising clear of the mesh are not traced), each blocked one dark.
+    fn sun_through(&self, shaded: &[(u8, Scatter)], c: &mut Counters) -> [Vec3; CAMERA_BATCH] {
+        let mut direct = [Vec3::ZERO; CAMERA_BATCH];
+        let mut rays = [PathVertex::NONE.ray; CAMERA_BATCH];
+        let mut of = [0u8; CAMERA_BATCH];
+        let mut n = 0;
+        for (j, (_, s)) in shaded.iter().enumerate() {
+            if let Some((ray, light)) = s.sun {
+                direct[j] = light;
+                let d = Vec3::from(ray.dir);
+                let clear = ray.is_finite()
+                    && (self.skip_above_y.is_some_and(|top| ray.org[1] > top)
+                        || self
+                            .skip_slope
+                            .is_some_and(|k| d.y > k * (d.x * d.x + d.z * d.z).sqrt()));
+                if !clear {
+                    rays[n] = ray;
+                    of[n] = j as u8;
+                    n += 1;
+                }
+            }
+        }
+        if n > 0 {
+            c.sun_rays += n as u64;
+            let mut hits = [None; CAMERA_BATCH];
+            self.accel.intersect_many(&rays[..n], &mut hits[..n]);
+            for (&j, h) in of[..n].iter().zip(&hits[..n]) {
+                if h.is_some() {
+                    c.sun_occluded += 1;
+                    direct[j as usize] = Vec3::ZERO;
+                }
+            }
+        }
+        direct
     }
 
     /// Whether a ray is answered without the BVH: cut at `max_segments`, or known to miss the
@@ -453,6 +553,11 @@ struct PathVertex {
     sample: u8,
     parent: Option<u32>,
     in_water: bool,
+    /// The ray's footprint width at its origin, m (it grows by the pixel's spread per metre).
+    width_m: f32,
+    /// The density with which a rough hit that sampled the sun chose this ray's direction: the
+    /// sun the ray sees directly is weighed against the sun's own samples (0: full weight).
+    sun_pdf: f32,
 }
 
 impl PathVertex {
@@ -466,5 +571,7 @@ impl PathVertex {
         sample: 0,
         parent: None,
         in_water: false,
+        width_m: 0.0,
+        sun_pdf: 0.0,
     };
 }

@@ -35,7 +35,7 @@ impl Lobe {
     /// (a trace below 1e-10: a delta interface).
     pub fn new(n: Vec3, cov: [f32; 3]) -> Option<Lobe> {
         let [a, b, c] = cov;
-        if !(a + c > 1e-10) {
+        if (a + c).is_nan() || a + c <= 1e-10 {
             return None;
         }
         // The tangent plane's axes nearest the world's x and z: a slope along them is the
@@ -43,13 +43,25 @@ impl Lobe {
         // the vertical wherever a lobe is wide).
         let t1 = (Vec3::X - Vec3::X.dot(n) * n).normalize_or(Vec3::X);
         let t2 = n.cross(t1).normalize_or(Vec3::Z);
-        // n x t1 is -z for n = +y: slopes along t2 are minus the z slopes.
-        let b = -b;
+        // n x t1 is -z for n = +y (slopes along t2 are minus the z slopes) and +z for n = -y
+        // (the water side, where both slopes change sign): the cross term follows t1.x t2.z.
+        let b = b * (t1.x * t2.z);
         let half = 0.5 * (a - c);
         let root = (half * half + b * b).sqrt();
         let (l1, l2) = (0.5 * (a + c) + root, (0.5 * (a + c) - root).max(0.0));
-        let phi = 0.5 * (2.0 * b).atan2(a - c);
-        let (s, co) = phi.sin_cos();
+        // The eigenvector of l1: (root + half, b) or, where that vanishes (b = 0, c > a),
+        // (b, root - half); their cosine and sine in the (t1, t2) plane.
+        let (ex, ey) = if half >= 0.0 {
+            (root + half, b)
+        } else {
+            (b, root - half)
+        };
+        let norm = (ex * ex + ey * ey).sqrt();
+        let (co, s) = if norm > 0.0 {
+            (ex / norm, ey / norm)
+        } else {
+            (1.0, 0.0)
+        };
         Some(Lobe {
             x: co * t1 + s * t2,
             y: -s * t1 + co * t2,
@@ -113,6 +125,17 @@ impl Lobe {
     #[inline]
     pub fn g1(&self, w: Vec3) -> f32 {
         1.0 / (1.0 + self.lambda(w))
+    }
+
+    /// A microfacet normal m (local, z > 0) drawn by area: its slopes Gaussian with the lobe's
+    /// covariance (Box-Muller), as the normal at a uniformly drawn point of the surface. Its
+    /// density per steradian of m is D(m) m.z.
+    pub fn sample_area(&self, u1: f32, u2: f32) -> Vec3 {
+        let r = (-2.0 * (1.0 - u1).max(1e-30).ln()).sqrt();
+        let (s, c) = (std::f32::consts::TAU * u2).sin_cos();
+        let k = std::f32::consts::FRAC_1_SQRT_2;
+        let (sx, sy) = (k * self.alpha[0] * r * c, k * self.alpha[1] * r * s);
+        Vec3::new(-sx, -sy, 1.0).normalize()
     }
 
     /// A microfacet normal m (local, z > 0) visible from local `wo` (z > 0), distributed as
@@ -257,7 +280,7 @@ pub fn erf_inv(x: f32) -> f32 {
             0.005_739_507_7,
             -0.007_622_461_3,
             0.009_438_870_5,
-            1.001_674_1,
+            1.001_674,
             2.832_976_8,
         ] {
             p = c + p * w;

@@ -7,6 +7,7 @@ pub mod camera;
 pub mod counters;
 pub mod earth_tilt;
 pub mod film;
+pub mod footprint;
 pub mod integrator;
 mod interface;
 pub mod microfacet;

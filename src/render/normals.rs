@@ -10,25 +10,32 @@ use super::integrator::{CAMERA_BATCH, SceneRef, TraceSettings};
 use crate::accel::Hit;
 use crate::config::NormalMode;
 use crate::mesh::Mesh;
+use crate::ocean::MAX_LAYERS;
 
 impl SceneRef<'_> {
     /// The shading normals (air side up) at a batch of hits into `out` (a miss's entry is
     /// not used: left as it is, or +y).
     /// Mapped normals: each hit's texture coordinate, the ocean's normals there computed
     /// together ([`Sampler::normals`], bit for bit one at a time), tilted to the curved earth.
+    /// Filtered normals: the same, each layer weighted by the share of its waves the hit's
+    /// footprint (`widths[i]` metres across) resolves, and the slope covariance of the rest
+    /// into `covs` ([`crate::ocean::slopes::SurfaceSlopes::split`]; left as it is for other modes).
     /// One call in 64 is timed alone, one timed with a second evaluation of the same normals
     /// (see [`Counters::normal_map_thread_seconds`]).
     pub(super) fn shading_normals(
         &self,
         hits: &[Option<Hit>],
+        widths: &[f32],
         settings: &TraceSettings,
         c: &mut Counters,
         out: &mut [Vec3],
+        covs: &mut [[f32; 3]],
     ) {
         debug_assert!(hits.len() <= CAMERA_BATCH && out.len() == hits.len());
         let mesh = self.accel.mesh();
+        let filtered = settings.normals == NormalMode::Filtered;
         match (settings.normals, &self.ocean) {
-            (NormalMode::Mapped, Some(ocean)) => {
+            (NormalMode::Mapped | NormalMode::Filtered, Some(ocean)) => {
                 let mut uv = [[0.0f32; 2]; CAMERA_BATCH];
                 let mut at = [0u8; CAMERA_BATCH];
                 let mut n = 0;
@@ -41,9 +48,25 @@ impl SceneRef<'_> {
                 if n == 0 {
                     return;
                 }
+                let mut weights = [[1.0f32; MAX_LAYERS]; CAMERA_BATCH];
+                if filtered {
+                    let slopes = self
+                        .slopes
+                        .expect("filtered normals need the ocean's slope bands");
+                    for (j, &i) in at[..n].iter().enumerate() {
+                        let sigma = widths[i as usize] * settings.filter_width;
+                        let split = slopes.split(sigma);
+                        weights[j] = split.weights;
+                        covs[i as usize] = split.cov;
+                    }
+                }
                 let mapped = |normals: &mut [Vec3]| {
                     let mut flat = [[0.0f32; 3]; CAMERA_BATCH];
-                    ocean.normals(&uv[..n], &mut flat[..n]);
+                    if filtered {
+                        ocean.normals_weighted(&uv[..n], &weights[..n], &mut flat[..n]);
+                    } else {
+                        ocean.normals(&uv[..n], &mut flat[..n]);
+                    }
                     for (o, f) in normals.iter_mut().zip(&flat) {
                         *o = Vec3::from(*f);
                     }

@@ -21,6 +21,7 @@ use crate::accel::{Accel, tracing_pool};
 use crate::config::{Backend, ConfigError, SceneConfig};
 use crate::image_io::ImageError;
 use crate::lod::{EARTH_RADIUS_M, LodError, LodParams, LodStats, tessellate};
+use crate::ocean::slopes::SurfaceSlopes;
 use crate::ocean::{OceanError, Surface};
 use crate::sky::Sky;
 
@@ -474,7 +475,11 @@ impl Prepared {
         cfg.validate()?;
         let camera = Camera::new(cfg.camera.projection, cfg.camera.width, cfg.camera.aspect);
         let sampler = self.ocean.sampler(self.camera_position_m);
+        let filtered = cfg.render.normals == crate::config::NormalMode::Filtered;
+        let slopes = filtered.then(|| self.pool.install(|| SurfaceSlopes::new(&self.ocean)));
         let scene_ref = SceneRef {
+            slopes: slopes.as_ref(),
+            sun: if filtered { self.sky.sun_light() } else { None },
             accel: self.accel.as_ref(),
             skip_slope: self.skip_slope,
             skip_above_y: self.skip_above_y,
@@ -544,6 +549,8 @@ impl Prepared {
             mrays_per_s: c.rays as f64 / seconds_trace.max(1e-12) / 1e6,
             noise_rms: film.noise_rms(),
             noise_rms_relative: film.noise_rms().map(|n| n / mean_luminance(&film.image)),
+            noise_rms_sea: film.noise_rms_sea(&camera).map(|n| n.0),
+            noise_rms_sea_relative: film.noise_rms_sea(&camera).map(|n| n.1),
             nan_count: c.nan,
             folded_fraction,
             escaped_below_horizon: c.escaped_below_horizon,

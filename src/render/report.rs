@@ -57,6 +57,12 @@ pub struct RenderReport {
     pub noise_rms: Option<f64>,
     /// `noise_rms` over the image's mean luminance.
     pub noise_rms_relative: Option<f64>,
+    /// `noise_rms` over the pixels that look at the sea (centre below the horizon), and that
+    /// over the sea's mean luminance. Absent from reports written before it.
+    #[serde(default)]
+    pub noise_rms_sea: Option<f64>,
+    #[serde(default)]
+    pub noise_rms_sea_relative: Option<f64>,
     pub nan_count: u64,
     /// Share of the sea surface that folds over itself (Jacobian <= 0).
     pub folded_fraction: f64,
