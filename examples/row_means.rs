@@ -1,0 +1,76 @@
+//! Two renders of the same band, row by row: each row's mean luminance in A and B, their
+//! difference, its standard error from the renders' own `Y.variance` (pixels independent), and
+//! the band 0 to 5 degrees below the horizon as a whole. How docs/filtered.md compares filtered
+//! and mapped normals:
+//!
+//! ```text
+//! cargo run --release --example row_means -- A.exr B.exr ROW0
+//! ```
+//!
+//! ROW0 is the band's first row in the full-sphere image (the equirectangular camera's
+//! `row0`: floor((90 - top) / 180 x width / 2), 506 for +1:-6 at 2048 px). The standard error
+//! trusts each pixel's sample variance, which under-states the error of pixels whose glints
+//! few samples found: read a glint row's z with care.
+
+use std::path::Path;
+fn load(p: &str) -> (vastocean::image_io::RgbImage, Vec<f32>) {
+    let p = Path::new(p);
+    (
+        vastocean::image_io::read_exr(p).unwrap(),
+        vastocean::image_io::read_exr_channel(p, "Y.variance").unwrap(),
+    )
+}
+fn main() {
+    let a: Vec<String> = std::env::args().collect();
+    if a.len() != 4 {
+        eprintln!("usage: row_means A.exr B.exr ROW0");
+        std::process::exit(2);
+    }
+    let (ia, va) = load(&a[1]);
+    let (ib, vb) = load(&a[2]);
+    let (w, h) = (ia.width, ia.height);
+    let full_h = w / 2;
+    let row0: f64 = a[3]
+        .parse()
+        .expect("ROW0: the band's first full-sphere row");
+    let lum = |p: [f32; 3]| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64;
+    let (mut sa, mut sb, mut sva, mut svb, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for y in 0..h {
+        let el = 90.0 - (row0 + y as f64 + 0.5) * 180.0 / full_h as f64;
+        let (mut ma, mut mb, mut vva, mut vvb) = (0.0, 0.0, 0.0, 0.0);
+        for x in 0..w {
+            let i = y * w + x;
+            ma += lum(ia.pixels[i]);
+            mb += lum(ib.pixels[i]);
+            vva += va[i] as f64;
+            vvb += vb[i] as f64;
+        }
+        let wf = w as f64;
+        let (ma, mb) = (ma / wf, mb / wf);
+        let se = ((vva + vvb) / (wf * wf)).sqrt();
+        println!(
+            "el {el:7.3}: a {ma:.5} b {mb:.5} diff {:+.5} se {:.5} z {:+.2} rel {:+.3}%",
+            mb - ma,
+            se,
+            (mb - ma) / se,
+            100.0 * (mb - ma) / ma
+        );
+        if el < 0.0 && el > -5.0 {
+            sa += ma;
+            sb += mb;
+            sva += vva / (wf * wf);
+            svb += vvb / (wf * wf);
+            n += 1.0;
+        }
+    }
+    let se = (sva + svb).sqrt() / n;
+    println!(
+        "band 0..-5: a {:.5} b {:.5} diff {:+.5} se {:.5} z {:+.2} rel {:+.3}%",
+        sa / n,
+        sb / n,
+        (sb - sa) / n,
+        se,
+        (sb - sa) / n / se,
+        100.0 * (sb - sa) / sa
+    );
+}
