@@ -3,7 +3,7 @@
 
 use crate::common::vastocean;
 use vastocean::app;
-use vastocean::config::{LodChoice, LodConfig, Projection, SceneConfig};
+use vastocean::config::{LodChoice, LodConfig, NormalMode, Projection, SceneConfig};
 
 fn tmp(name: &str) -> std::path::PathBuf {
     std::env::temp_dir().join(format!("vastocean-app-{name}-{}", std::process::id()))
@@ -128,6 +128,7 @@ fn tiny_compare_runs_end_to_end_and_writes_every_file() {
         low,
         rows_deg: (0.0, -5.0),
         max_boost: 16,
+        filtered: true,
         out: dir.clone(),
         progress: false,
     };
@@ -137,7 +138,11 @@ fn tiny_compare_runs_end_to_end_and_writes_every_file() {
     assert!(s.sampling.boosted_pixels > 0, "{:?}", s.sampling);
     assert!(s.sampling.boosted_pixels < s.sampling.analysed_pixels / 2);
     assert!(s.sampling.cost_factor > 1.0 && s.sampling.cost_factor <= 2.0);
-    for sc in Scenario::ALL {
+    // With `filtered`, the low tessellation with filtered normals after the paper's five.
+    assert_eq!(job.scenarios().last(), Some(&Scenario::LowFiltered));
+    assert_eq!(s.scenarios.len(), 6);
+    assert!(s.std_low_filtered_corrected.is_some_and(|v| v.is_finite()));
+    for sc in job.scenarios() {
         for ext in ["exr", "png"] {
             let f = dir.join(format!("{}.{ext}", sc.name()));
             assert!(f.is_file(), "{} missing", f.display());
@@ -216,6 +221,7 @@ fn bench_accuracy_writes_its_files_and_a_configuration_matches_itself() {
         width: 64,
         tessellations: vec![Tessellation::preset(LodChoice::PaperLow)],
         spp: vec![8, 32],
+        normals: vec![NormalMode::Mapped, NormalMode::Vertex, NormalMode::Filtered],
         reference: Tessellation::preset(LodChoice::PaperLow),
         reference_spp: 32,
         reference_spp_max: 512,
@@ -224,7 +230,16 @@ fn bench_accuracy_writes_its_files_and_a_configuration_matches_itself() {
         progress: false,
     };
     let r = app::bench::accuracy::run(&job).unwrap();
-    assert_eq!(r.points.len(), 4, "mapped and vertex, 8 and 32 spp");
+    assert_eq!(
+        r.points.len(),
+        6,
+        "mapped, vertex and filtered, 8 and 32 spp"
+    );
+    assert!(
+        r.points[4..]
+            .iter()
+            .all(|p| p.normals == NormalMode::Filtered)
+    );
     // The mapped points are the reference's configuration with fewer samples: no bias to
     // resolve, and their error, noise included, is their noise (at 32 spp, four samples a
     // batch on a low-discrepancy pattern: a noise taken from the samples' variance, as if they

@@ -25,6 +25,10 @@ pub enum BenchCommand {
         /// A reduced sweep (256 px, 4 tessellations, 8 to 128 spp): about a minute on 2 cores.
         #[arg(long)]
         quick: bool,
+        /// Also render every tessellation with filtered normals (docs/filtered.md), a third
+        /// group on the frontier.
+        #[arg(long)]
+        filtered: bool,
         /// Worker threads (0 = all cores).
         #[arg(long, default_value_t = 0, value_parser = super::threads_arg)]
         threads: usize,
@@ -54,7 +58,7 @@ pub enum BenchCommand {
 pub fn run(c: BenchCommand) -> Result<()> {
     match c {
         #[rustfmt::skip]
-        BenchCommand::Accuracy { out, config, quick, threads, json } => {
+        BenchCommand::Accuracy { out, config, quick, filtered, threads, json } => {
             let mut scene = match &config {
                 Some(path) => SceneConfig::load(path).map_err(AppError::from)?,
                 None => app::bench::accuracy::AccuracyJob::default_scene(),
@@ -66,6 +70,9 @@ pub fn run(c: BenchCommand) -> Result<()> {
                 app::bench::accuracy::AccuracyJob::full(scene, out)
             };
             job.progress = true;
+            if filtered {
+                job.normals.push(vastocean::config::NormalMode::Filtered);
+            }
             emit(&app::bench::accuracy::run(&job)?, json)
         }
         #[cfg(feature = "embree")]

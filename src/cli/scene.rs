@@ -321,6 +321,10 @@ pub struct CompareArgs {
     /// state's improvement ratio with an interval that holds the spread between seas too.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=64))]
     pub realizations: u16,
+    /// Also render the low tessellation with filtered normals: scenario `low_filtered`, with
+    /// its statistics beside the paper's (docs/filtered.md).
+    #[arg(long)]
+    pub filtered: bool,
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
@@ -355,6 +359,7 @@ impl CompareArgs {
             scene,
             rows_deg: self.rows,
             max_boost: self.max_boost,
+            filtered: self.filtered,
             out: self.out.clone(),
             progress: true,
         })

@@ -31,6 +31,10 @@ pub struct CompareJob {
     /// Most samples a noisy analysed pixel may take, in multiples of the scene's spp; 1
     /// renders every pixel alike (see [`sampling`]).
     pub max_boost: u16,
+    /// Also render the low tessellation with filtered normals (scenario `low_filtered`, after
+    /// the noise floor; docs/filtered.md).
+    #[serde(default)]
+    pub filtered: bool,
     /// Output folder.
     pub out: PathBuf,
     /// Progress on stderr.
@@ -48,6 +52,8 @@ pub enum Scenario {
     LowMapped,
     LowUnmapped,
     NoiseFloor,
+    /// Beyond the paper, with `--filtered`: the low tessellation with filtered normals.
+    LowFiltered,
 }
 
 impl Scenario {
@@ -67,16 +73,21 @@ impl Scenario {
             Scenario::LowMapped => "low_mapped",
             Scenario::LowUnmapped => "low_unmapped",
             Scenario::NoiseFloor => "noise_floor",
+            Scenario::LowFiltered => "low_filtered",
         }
     }
 
     fn high(self) -> bool {
-        !matches!(self, Scenario::LowMapped | Scenario::LowUnmapped)
+        !matches!(
+            self,
+            Scenario::LowMapped | Scenario::LowUnmapped | Scenario::LowFiltered
+        )
     }
 
     fn normals(self) -> NormalMode {
         match self {
             Scenario::HighUnmapped | Scenario::LowUnmapped => NormalMode::Vertex,
+            Scenario::LowFiltered => NormalMode::Filtered,
             _ => NormalMode::Mapped,
         }
     }
@@ -88,6 +99,18 @@ impl Scenario {
         } else {
             0
         }
+    }
+}
+
+impl CompareJob {
+    /// The scenarios this job renders: the paper's four and the noise floor, then
+    /// `low_filtered` if asked for.
+    pub fn scenarios(&self) -> Vec<Scenario> {
+        let mut s = Scenario::ALL.to_vec();
+        if self.filtered {
+            s.push(Scenario::LowFiltered);
+        }
+        s
     }
 }
 
@@ -127,6 +150,11 @@ pub struct CompareSummary {
     pub mean_low_mapped: f64,
     pub mean_low_unmapped: f64,
     pub mean_noise_floor: f64,
+    /// With `--filtered`: the paper's statistic and its noise-corrected value for
+    /// `low_filtered` (its intervals are in `estimates`).
+    pub std_low_filtered: Option<f64>,
+    pub std_low_filtered_corrected: Option<f64>,
+    pub mean_low_filtered: Option<f64>,
     /// std(low unmapped) / std(low mapped) of the paper's statistic (the paper: 5 to 10 for
     /// its case 87).
     pub improvement_ratio: f64,
@@ -225,7 +253,7 @@ fn check(job: &CompareJob) -> Result<(), AppError> {
 pub const BASELINE_NOISE_SHARE: f64 = 0.25;
 
 /// Renders every scenario, each tessellation prepared once, after the pilot that places the
-/// samples; returned in [`Scenario::ALL`] order, with how the samples were spent.
+/// samples; returned in [`CompareJob::scenarios`] order, with how the samples were spent.
 fn render_scenarios(
     job: &CompareJob,
 ) -> Result<(Vec<(ScenarioInfo, Rendered)>, SamplingReport), AppError> {
@@ -299,7 +327,7 @@ fn render_scenarios(
         (true, high, &high_cfg, &job.high),
         (false, low, &low_cfg, &job.low),
     ] {
-        for sc in Scenario::ALL.into_iter().filter(|s| s.high() == is_high) {
+        for sc in job.scenarios().into_iter().filter(|s| s.high() == is_high) {
             let mut c = cfg.clone();
             c.render.normals = sc.normals();
             c.render.seed = cfg.render.seed.wrapping_add(sc.seed_offset());
@@ -325,7 +353,8 @@ fn render_scenarios(
         // The high tessellation's BVH is freed here, before the low one is traced.
         drop(prepared);
     }
-    out.sort_by_key(|(info, _)| Scenario::ALL.iter().position(|s| *s == info.name));
+    let order = job.scenarios();
+    out.sort_by_key(|(info, _)| order.iter().position(|s| *s == info.name));
     let report = sampling::report(
         &boost,
         &camera,
@@ -420,6 +449,9 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
         mean_low_mapped: e[1].mean.value,
         mean_low_unmapped: e[2].mean.value,
         mean_noise_floor: e[3].mean.value,
+        std_low_filtered: e.get(4).map(|s| s.std),
+        std_low_filtered_corrected: e.get(4).map(|s| s.std_corrected.value),
+        mean_low_filtered: e.get(4).map(|s| s.mean.value),
         improvement_ratio: improvement.plain,
         std_high_unmapped_corrected: e[0].std_corrected.value,
         std_low_mapped_corrected: e[1].std_corrected.value,

@@ -214,6 +214,7 @@ mod tests {
             low: Default::default(),
             rows_deg: (0.0, -5.0),
             max_boost: 64,
+            filtered: false,
             out: std::env::temp_dir().join("vastocean-realizations-refused"),
             progress: false,
         };

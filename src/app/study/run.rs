@@ -55,6 +55,7 @@ pub fn run_case(
         scene,
         rows_deg: plan.rows_deg,
         max_boost: plan.max_boost,
+        filtered: false,
         out: cdir,
         progress,
     };

@@ -74,6 +74,9 @@ pub struct AccuracyJob {
     pub tessellations: Vec<Tessellation>,
     /// Each a multiple of the film's batch count (8).
     pub spp: Vec<u32>,
+    /// The normal modes every tessellation is rendered with (the paper's two; `--filtered`
+    /// adds filtered normals).
+    pub normals: Vec<NormalMode>,
     pub reference: Tessellation,
     /// The reference's first sample count, and the most it may take.
     pub reference_spp: u32,
@@ -117,6 +120,7 @@ impl AccuracyJob {
                 Tessellation::preset(LodChoice::Auto),
             ],
             spp: vec![8, 16, 32, 64, 128, 256],
+            normals: vec![NormalMode::Mapped, NormalMode::Vertex],
             reference: Tessellation::preset(LodChoice::PaperHigh),
             reference_spp: 4096,
             reference_spp_max: 65536,
@@ -316,7 +320,7 @@ pub fn run(job: &AccuracyJob) -> Result<AccuracyReport, AppError> {
     check(job)?;
     crate::app::check_output_dir(&job.out)?;
     let t0 = Instant::now();
-    let per_tess = 2 * job.spp.len() as u64;
+    let per_tess = (job.normals.len() * job.spp.len()) as u64;
     let progress = Progress::new(
         job.progress,
         job.tessellations.len() as u64 * per_tess + 1,

@@ -67,7 +67,11 @@ pub(super) fn write(
             seconds: p.seconds_total,
             error: p.error,
             error_ci: p.error_ci,
-            group: usize::from(p.normals == NormalMode::Vertex),
+            group: match p.normals {
+                NormalMode::Mapped => 0,
+                NormalMode::Vertex => 1,
+                NormalMode::Filtered => 2,
+            },
             pareto: p.pareto,
             label: (p.lod.starts_with("paper") && p.spp == *job.spp.last().unwrap_or(&0))
                 .then(|| format!("  {} {}", p.lod, p.normals)),
@@ -80,7 +84,14 @@ pub(super) fn write(
             reference.lod, reference.spp, job.width
         ),
         "std of the luminance difference from the converged image",
-        &["mapped normals", "vertex normals"],
+        &["mapped normals", "vertex normals", "filtered normals"][..if job
+            .normals
+            .contains(&NormalMode::Filtered)
+        {
+            3
+        } else {
+            2
+        }],
         &chart,
     )
     .map_err(|m| AppError::Run(format!("cannot draw {}: {m}", png.display()).into()))?;
@@ -132,12 +143,12 @@ impl fmt::Display for AccuracyReport {
         )?;
         writeln!(
             f,
-            "  lod          normals  spp   triangles   seconds   error, noise included [95%]   bias [95%]                  rel. RMSE [95%]           front"
+            "  lod          normals   spp   triangles   seconds   error, noise included [95%]   bias [95%]                  rel. RMSE [95%]           front"
         )?;
         for p in &self.points {
             writeln!(
                 f,
-                "  {:<12} {:<7} {:>4} {:>11} {:>9.2}   {:<29} {:<27} {:.4} [{:.4}, {:.4}]   {}",
+                "  {:<12} {:<8} {:>4} {:>11} {:>9.2}   {:<29} {:<27} {:.4} [{:.4}, {:.4}]   {}",
                 p.lod,
                 p.normals.to_string(),
                 p.spp,

@@ -9,7 +9,7 @@ use crate::app::AppError;
 use crate::app::bench::Progress;
 use crate::app::compare::sampling;
 use crate::color::luminance;
-use crate::config::{NormalMode, SceneConfig};
+use crate::config::SceneConfig;
 use crate::render::Camera;
 use crate::render::film::{Film, MAX_BATCHES, Samples};
 use crate::render::pipeline::{Prepared, prepare};
@@ -32,7 +32,7 @@ pub(super) fn render_points(
         let p = prepare(&cfg)?;
         let shared = p.seconds_ocean + p.seconds_tessellation + p.seconds_build;
         let structures = (p.ocean.bytes() + p.accel.mesh().bytes()) as u64 + p.accel.bytes();
-        for normals in [NormalMode::Mapped, NormalMode::Vertex] {
+        for &normals in &job.normals {
             for &spp in &job.spp {
                 let mut c = cfg.clone();
                 c.render.normals = normals;
