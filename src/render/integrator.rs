@@ -107,7 +107,8 @@ pub struct SceneRef<'a> {
     pub predict_camera_hits: bool,
     /// The ocean, for mapped and filtered normals (required for both).
     pub ocean: Option<Sampler<'a>>,
-    /// The ocean's slope covariance by band, for filtered normals (required for them).
+    /// The ocean's slope covariance by band, for filtered normals (without it they resolve
+    /// every wave: mapped normals).
     pub slopes: Option<&'a SurfaceSlopes>,
     /// The sky's sun, sampled at rough hits of filtered normals (`None`: found by chance).
     pub sun: Option<SunLight>,

@@ -49,10 +49,8 @@ impl SceneRef<'_> {
                     return;
                 }
                 let mut weights = [[1.0f32; MAX_LAYERS]; CAMERA_BATCH];
-                if filtered {
-                    let slopes = self
-                        .slopes
-                        .expect("filtered normals need the ocean's slope bands");
+                // (Without the slope bands every wave counts as resolved: mapped normals.)
+                if let Some(slopes) = self.slopes.filter(|_| filtered) {
                     for (j, &i) in at[..n].iter().enumerate() {
                         let sigma = widths[i as usize] * settings.filter_width;
                         let split = slopes.split(sigma);

@@ -2,7 +2,9 @@
 //! (see the parent module).
 
 use super::{Cell, Extra};
-use crate::config::{AnalyticSky, Backend, LodChoice, Projection, SceneConfig};
+use crate::config::{
+    AnalyticSky, Backend, FilterLobe, LodChoice, NormalMode, Projection, SceneConfig,
+};
 
 /// Whole multiples of every period of [`period_layers`] are multiples of 400 m.
 const PERIOD_MULTIPLE_M: f64 = 400.0 * 250.0;
@@ -239,6 +241,33 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
         &|s| s.lod.preset = LodChoice::Auto,
         Extra::None,
     );
+    for (name, lobe) in [
+        ("filtered", FilterLobe::Mapped),
+        ("filtered-smith", FilterLobe::Smith),
+    ] {
+        add(
+            name,
+            "normals",
+            format!("filtered, {lobe} lobe (the sun sampled)"),
+            &|s| {
+                s.render.normals = NormalMode::Filtered;
+                s.render.filter_lobe = lobe;
+            },
+            Extra::None,
+        );
+    }
+    if full {
+        add(
+            "filtered-height-10000",
+            "normals",
+            "filtered from 10 km up (every wave below the footprint)".into(),
+            &|s| {
+                s.render.normals = NormalMode::Filtered;
+                s.camera.height_m = 10_000.0;
+            },
+            Extra::None,
+        );
+    }
     if full {
         add(
             "lod-paper-high",
@@ -277,6 +306,24 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
         },
         Extra::Furnace,
     );
+    for (name, lobe) in [
+        ("furnace-filtered", FilterLobe::Mapped),
+        ("furnace-filtered-smith", FilterLobe::Smith),
+    ] {
+        add(
+            name,
+            "white furnace",
+            format!("uniform sky 1, storm, filtered normals ({lobe} lobe)"),
+            &|s| {
+                s.sky.analytic = furnace;
+                storm(s);
+                s.camera.height_m = 30.0;
+                s.render.normals = NormalMode::Filtered;
+                s.render.filter_lobe = lobe;
+            },
+            Extra::Furnace,
+        );
+    }
     add(
         "furnace-pinhole-down",
         "white furnace",
