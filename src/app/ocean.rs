@@ -166,6 +166,15 @@ impl fmt::Display for OceanReport {
             p.interp,
             100.0 * (s.mss_lookup / s.mss_spectrum - 1.0)
         )?;
+        if let Some(cm) = s.cox_munk_mss {
+            writeln!(
+                f,
+                "    Cox & Munk's clean sea at this wind: {cm:.5}; the spectrum, cut off at {:.0} rad/m ({:.1} cm waves), has {:.0} % of it",
+                s.spectrum_cutoff_rad_m,
+                100.0 * std::f64::consts::TAU / s.spectrum_cutoff_rad_m.max(1e-30),
+                100.0 * s.mss_spectrum / cm
+            )?;
+        }
         for (i, l) in s.layers.iter().enumerate() {
             writeln!(
                 f,

@@ -9,6 +9,16 @@ use super::Surface;
 use crate::ocean::spectrum::Part;
 use crate::ocean::{SpectrumKind, SpreadingKind};
 
+/// Roughness length of the neutral log wind profile that takes the 10 m wind to Cox & Munk's
+/// 12.5 m, m (a typical open-sea value).
+pub const COX_MUNK_Z0_M: f64 = 1e-4;
+
+/// Cox & Munk's clean-surface mean square slope for a wind of `u10` m/s at 10 m.
+pub fn cox_munk_mss(u10: f64) -> f64 {
+    let u12_5 = u10 * (12.5 / COX_MUNK_Z0_M).ln() / (10.0 / COX_MUNK_Z0_M).ln();
+    0.003 + 5.12e-3 * u12_5
+}
+
 /// Per-layer part of [`OceanSummary`].
 #[derive(Clone, Debug, Serialize)]
 pub struct LayerSummary {
@@ -70,6 +80,14 @@ pub struct OceanSummary {
     pub mss_spectrum: f64,
     pub mss_grid: f64,
     pub mss_lookup: f64,
+    /// The largest wavenumber any layer holds, rad/m: the spectrum's cut-off (shorter waves,
+    /// the capillaries among them, are not in the surface).
+    pub spectrum_cutoff_rad_m: f64,
+    /// Cox & Munk's clean-surface fit of the mean square slope measured from sun glitter (1954):
+    /// 0.003 + 5.12e-3 U12.5, with the wind at 12.5 m from the 10 m wind by a neutral log
+    /// profile of roughness length [`COX_MUNK_Z0_M`] (x 1.019). None for a sea without a
+    /// wind sea.
+    pub cox_munk_mss: Option<f64>,
     /// Significant wave height 4 x realization RMS, m.
     pub hs_m: f64,
     /// The significant wave height asked for (`hs_m`, or 4 x `rms_m`), m; none without a target.
@@ -145,6 +163,10 @@ impl Surface {
             mss_spectrum: layers.iter().map(|l| l.mss_spectrum).sum(),
             mss_grid: layers.iter().map(|l| l.mss_grid).sum(),
             mss_lookup: self.stats.sampled_mss,
+            spectrum_cutoff_rad_m: layers.iter().map(|l| l.k_max).fold(0.0, f64::max),
+            cox_munk_mss: s
+                .filter(|_| self.params.wind_speed > 0.0)
+                .map(|_| cox_munk_mss(self.params.wind_speed)),
             hs_m: 4.0 * realization_var.sqrt(),
             hs_target_m: self.params.rms_target().map(|rms| 4.0 * rms),
             amplitude_scale: self.amplitude_scale,
@@ -192,5 +214,17 @@ impl Surface {
                 }
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cox_munk_takes_the_wind_to_12_5_m() {
+        // U12.5 = 10 ln(125000) / ln(100000) = 10.194 m/s: 0.003 + 5.12e-3 x 10.194.
+        assert!((cox_munk_mss(10.0) - 0.055_19).abs() < 1e-5, "{}", cox_munk_mss(10.0));
+        assert!((cox_munk_mss(0.0) - 0.003).abs() < 1e-12);
     }
 }
