@@ -224,7 +224,11 @@ mod tests {
     #[test]
     fn cox_munk_takes_the_wind_to_12_5_m() {
         // U12.5 = 10 ln(125000) / ln(100000) = 10.194 m/s: 0.003 + 5.12e-3 x 10.194.
-        assert!((cox_munk_mss(10.0) - 0.055_19).abs() < 1e-5, "{}", cox_munk_mss(10.0));
+        assert!(
+            (cox_munk_mss(10.0) - 0.055_19).abs() < 1e-5,
+            "{}",
+            cox_munk_mss(10.0)
+        );
         assert!((cox_munk_mss(0.0) - 0.003).abs() < 1e-12);
     }
 }
