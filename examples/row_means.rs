@@ -33,7 +33,7 @@ fn main() {
     let row0: f64 = a[3]
         .parse()
         .expect("ROW0: the band's first full-sphere row");
-    let lum = |p: [f32; 3]| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64;
+    let lum = |p: [f32; 3]| vastocean::color::luminance(p) as f64;
     let (mut sa, mut sb, mut sva, mut svb, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for y in 0..h {
         let el = 90.0 - (row0 + y as f64 + 0.5) * 180.0 / full_h as f64;
