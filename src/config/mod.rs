@@ -446,6 +446,16 @@ mod tests {
         let text = toml::to_string(&c).unwrap();
         let back: SceneConfig = toml::from_str(&text).unwrap();
         assert_eq!(back, c);
+        // A sky at infinity is written `inf` and read back as one.
+        let mut c = SceneConfig::default();
+        c.sky.dome_altitude_m = None;
+        let text = c.to_toml().unwrap();
+        assert!(text.contains("dome_altitude_m = inf"), "{text}");
+        assert_eq!(toml::from_str::<SceneConfig>(&text).unwrap(), c);
+        let c: SceneConfig = toml::from_str("[sky]\ndome_altitude_m = 5e4\n").unwrap();
+        assert_eq!(c.sky.dome_altitude_m, Some(5e4));
+        let c: SceneConfig = toml::from_str("[sky]\ndome_altitude_m = -inf\n").unwrap();
+        assert!(c.validate().is_err());
     }
 
     #[test]

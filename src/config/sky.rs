@@ -85,7 +85,8 @@ pub struct SkyConfig {
     /// Without one, `analytic` lights the scene.
     pub file: Option<PathBuf>,
     pub analytic: AnalyticSky,
-    /// Sky dome altitude, m (the paper: 200 km); absent = at infinity.
+    /// Sky dome altitude, m (the paper: 200 km); `None` = at infinity, written `inf` in a file.
+    #[serde(with = "dome_altitude")]
     pub dome_altitude_m: Option<f64>,
     pub scale: f32,
     /// Clip the sky as a photograph clips the sun: radiance brighter (in luminance) than
@@ -94,6 +95,21 @@ pub struct SkyConfig {
     /// skies were photographs with clipped suns.)
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub clip_relative: Option<f32>,
+}
+
+/// `sky.dome_altitude_m` in a file: metres, or TOML's `inf` for a sky at infinity, written back
+/// the same way (a left-out key is the 200 km default, so `None` needs a spelling of its own).
+mod dome_altitude {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_f64(v.unwrap_or(f64::INFINITY))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+        let v = f64::deserialize(d)?;
+        Ok((v != f64::INFINITY).then_some(v))
+    }
 }
 
 impl Default for SkyConfig {
