@@ -21,7 +21,7 @@ use vastocean::config::{AnalyticSky, FilterLobe, SceneConfig};
 use vastocean::ocean::slopes::SurfaceSlopes;
 use vastocean::render::Camera;
 use vastocean::render::pipeline::prepare;
-use vastocean::sky::SUN_RADIUS_RAD;
+use vastocean::sky::{SUN_RADIUS_RAD, SkySource};
 
 /// The scene `scenes/far-field-glitter.toml` (the default sea without choppiness, seen from
 /// 3 km up, 40 degrees down towards a sun 40 degrees up at infinity, a black sky around it and
@@ -38,14 +38,14 @@ fn scene(lobe: FilterLobe, spp: u32) -> SceneConfig {
 }
 
 /// What the closed form needs of the scene.
+#[derive(Clone)]
 struct Setting {
     height_m: f64,
-    sun: DVec3,
     ior: f64,
     /// The realization's slope covariance (xx, xz, zz).
     cov: [f64; 3],
-    /// The sun disc's luminance.
-    sun_luminance: f64,
+    /// The sun as points: each direction with its luminance times the solid angle it stands for.
+    sun: Vec<(DVec3, f64)>,
     /// Cox & Munk's form with Smith's masking (the `smith` lobe), or the normals by area
     /// (the `mapped` lobe).
     smith: bool,
@@ -86,7 +86,7 @@ fn erfc(x: f64) -> f64 {
 /// of points, each reflected by the slope that sends it along `dir`, in the frame of the local
 /// vertical where `dir` meets the curved sea.
 fn closed_form(dir: DVec3, set: &Setting) -> f64 {
-    let (cov, sun) = (set.cov, set.sun);
+    let cov = set.cov;
     let r_earth = 6_371_000.0;
     let centre = DVec3::new(0.0, -r_earth, 0.0);
     let org = DVec3::new(0.0, set.height_m, 0.0);
@@ -105,40 +105,62 @@ fn closed_form(dir: DVec3, set: &Setting) -> f64 {
         w * c + a.cross(w) * s + a * a.dot(w) * (1.0 - c)
     };
     let v = to_local(-dir);
+    let det = cov[0] * cov[2] - cov[1] * cov[1];
+    let mut sum = 0.0;
+    for &(l, weight) in &set.sun {
+        let l = to_local(l);
+        let h = (v + l).normalize();
+        let (zx, zz) = (-h.x / h.y, -h.z / h.y);
+        // Gaussian density of the slope (zx, zz) with covariance (xx, xz, zz).
+        let q = (cov[2] * zx * zx - 2.0 * cov[1] * zx * zz + cov[0] * zz * zz) / det;
+        let p = (-0.5 * q).exp() / (2.0 * std::f64::consts::PI * det.sqrt());
+        let vh = v.dot(h);
+        let value = if set.smith {
+            let masking = 1.0 / ((1.0 + smith_lambda(v, cov)) * (1.0 + smith_lambda(l, cov)));
+            masking / (4.0 * v.y * h.y.powi(4))
+        } else {
+            1.0 / (4.0 * vh * h.y.powi(3))
+        };
+        sum += weight * fresnel(vh, set.ior) * p * value;
+    }
+    sum
+}
+
+/// The analytic sun's disc as points on a grid across it, luminance `l` each.
+fn disc_points(sun: DVec3, l: f64) -> Vec<(DVec3, f64)> {
     let u1 = DVec3::Y.cross(sun).normalize();
     let u2 = sun.cross(u1);
     let r = SUN_RADIUS_RAD as f64;
-    let disc_sr = 2.0 * std::f64::consts::PI * (1.0 - r.cos());
-    let det = cov[0] * cov[2] - cov[1] * cov[1];
-    let (mut sum, mut n) = (0.0, 0);
     const GRID: i32 = 24;
-    for i in 0..GRID {
-        for j in 0..GRID {
-            let (a, bb) = (
-                2.0 * (i as f64 + 0.5) / GRID as f64 - 1.0,
-                2.0 * (j as f64 + 0.5) / GRID as f64 - 1.0,
-            );
-            if a * a + bb * bb > 1.0 {
-                continue;
+    let points: Vec<DVec3> = (0..GRID * GRID)
+        .map(|k| {
+            let a = 2.0 * ((k % GRID) as f64 + 0.5) / GRID as f64 - 1.0;
+            let b = 2.0 * ((k / GRID) as f64 + 0.5) / GRID as f64 - 1.0;
+            (a, b)
+        })
+        .filter(|(a, b)| a * a + b * b <= 1.0)
+        .map(|(a, b)| (sun + r * (a * u1 + b * u2)).normalize())
+        .collect();
+    let disc_sr = 2.0 * std::f64::consts::PI * (1.0 - r.cos());
+    let each = l * disc_sr / points.len() as f64;
+    points.into_iter().map(|d| (d, each)).collect()
+}
+
+/// A map's sun as its lit texels above the horizon (the sky around it is black).
+fn map_points(img: &vastocean::image_io::RgbImage) -> Vec<(DVec3, f64)> {
+    use vastocean::equirect::{column_azimuth, direction64, row_elevation, texel_solid_angle};
+    let (w, h) = (img.width, img.height);
+    let mut points = Vec::new();
+    for j in 0..h / 2 {
+        for i in 0..w {
+            let l = vastocean::color::luminance(img.get(i, j)) as f64;
+            if l > 0.0 {
+                let d = direction64(row_elevation(j, h), column_azimuth(i, w));
+                points.push((d, l * texel_solid_angle(j, w, h)));
             }
-            n += 1;
-            let l = to_local((sun + r * (a * u1 + bb * u2)).normalize());
-            let h = (v + l).normalize();
-            let (zx, zz) = (-h.x / h.y, -h.z / h.y);
-            // Gaussian density of the slope (zx, zz) with covariance (xx, xz, zz).
-            let q = (cov[2] * zx * zx - 2.0 * cov[1] * zx * zz + cov[0] * zz * zz) / det;
-            let p = (-0.5 * q).exp() / (2.0 * std::f64::consts::PI * det.sqrt());
-            let vh = v.dot(h);
-            let value = if set.smith {
-                let masking = 1.0 / ((1.0 + smith_lambda(v, cov)) * (1.0 + smith_lambda(l, cov)));
-                masking / (4.0 * v.y * h.y.powi(4))
-            } else {
-                1.0 / (4.0 * vh * h.y.powi(3))
-            };
-            sum += fresnel(vh, set.ior) * p * value;
         }
     }
-    set.sun_luminance * disc_sr * sum / n as f64
+    points
 }
 
 /// One block of 8 x 8 pixels down the sun's column: its first row, the rendered mean luminance
@@ -166,17 +188,24 @@ fn blocks(cfg: &SceneConfig) -> Vec<Block> {
         (sun_elevation_deg as f64).to_radians(),
         (sun_azimuth_deg as f64).to_radians(),
     );
-    let set = |smith| Setting {
+    let sun = match &p.sky.source {
+        SkySource::Map(img) => map_points(img),
+        SkySource::Analytic { .. } => {
+            let l = p.sky.radiance(glam::Vec3::ZERO, sun.as_vec3()).to_array();
+            disc_points(sun, vastocean::color::luminance(l) as f64)
+        }
+    };
+    let smith = Setting {
         height_m: cfg.camera.height_m,
-        sun,
         ior: cfg.water.ior as f64,
         cov: SurfaceSlopes::new(&p.ocean).total(),
-        sun_luminance: vastocean::color::luminance(
-            p.sky.radiance(glam::Vec3::ZERO, sun.as_vec3()).to_array(),
-        ) as f64,
-        smith,
+        sun,
+        smith: true,
     };
-    let (smith, by_area) = (set(true), set(false));
+    let by_area = Setting {
+        smith: false,
+        ..smith.clone()
+    };
     eprintln!(
         "slope covariance (xx, xz, zz) {:?}, mss {:.5}",
         smith.cov,
@@ -222,8 +251,9 @@ fn blocks(cfg: &SceneConfig) -> Vec<Block> {
 /// that hold the glitter (a tenth of its peak and up) within 1 % plus four standard errors,
 /// the tails within a thousandth of the peak plus four. The other closed form must be many
 /// standard errors away in some block, or the check could not tell the two models apart.
-fn check(lobe: FilterLobe) {
-    let blocks = blocks(&scene(lobe, 16));
+fn check(cfg: &SceneConfig) {
+    let lobe = cfg.render.filter_lobe;
+    let blocks = blocks(cfg);
     let own = |b: &Block| match lobe {
         FilterLobe::Smith => (b.cox_munk, b.by_area),
         FilterLobe::Mapped => (b.by_area, b.cox_munk),
@@ -267,10 +297,25 @@ fn check(lobe: FilterLobe) {
 
 #[test]
 fn the_smith_lobe_glitter_is_cox_and_munk_s() {
-    check(FilterLobe::Smith);
+    check(&scene(FilterLobe::Smith, 16));
 }
 
 #[test]
 fn the_mapped_lobe_glitter_is_normal_mapping_s() {
-    check(FilterLobe::Mapped);
+    check(&scene(FilterLobe::Mapped, 16));
+}
+
+#[test]
+fn a_sky_maps_sun_is_sampled_too() {
+    // The same sky rasterized into a 2048-wide map (its disc a few texels): the map's sun is
+    // found and sampled, and the glitter is the closed form of those texels.
+    let mut cfg = scene(FilterLobe::Smith, 16);
+    let map = vastocean::sky::rasterize(&cfg.sky.analytic, 2048);
+    let dir = std::env::temp_dir().join(format!("vastocean-far-field-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("sun.exr");
+    vastocean::image_io::write_exr(&path, &map).unwrap();
+    cfg.sky.file = Some(path);
+    check(&cfg);
+    std::fs::remove_dir_all(&dir).unwrap();
 }

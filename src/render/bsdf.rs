@@ -209,7 +209,7 @@ impl SceneRef<'_> {
         rng: &mut Rng,
         c: &mut Counters,
     ) {
-        let Some(sun) = self.sun.filter(|_| !s.from_below) else {
+        let Some(sun) = self.sun.as_ref().filter(|_| !s.from_below) else {
             return;
         };
         let (eta_i, eta_t) = (1.0, settings.water.ior);
@@ -313,7 +313,7 @@ impl SceneRef<'_> {
         // the BSDF the sun is reflected by are the lobe's at w plus its at w's mirror image.
         // Past `branch_depth` the reflection is followed with probability F: its density
         // carries that factor.
-        let Some(sun) = self.sun.filter(|_| !s.from_below) else {
+        let Some(sun) = self.sun.as_ref().filter(|_| !s.from_below) else {
             return;
         };
         let both = shading.segment < settings.branch_depth;
@@ -366,7 +366,7 @@ impl SceneRef<'_> {
     /// weighted as multiple importance sampling wants when the ray left a rough hit that
     /// sampled the sun (`sun_pdf` > 0: the density with which that hit chose `d`).
     pub(super) fn weigh_sun(&self, org: Vec3, d: Vec3, sun_pdf: f32, l: Vec3) -> Vec3 {
-        match self.sun {
+        match &self.sun {
             Some(sun) if sun_pdf > 0.0 => {
                 let (p, radiance) = sun.seen(org, d);
                 if p == 0.0 {

@@ -107,7 +107,12 @@ pub(super) fn taps(d: [f32; 3], w: usize, h: usize) -> Taps {
 /// The bilinear blend of a lookup's four texels.
 #[inline(always)]
 pub(super) fn read_taps(img: &RgbImage, t: &Taps) -> [f32; 3] {
-    let p = |x: u32, y: u32| img.get(x as usize, y as usize);
+    read_taps_by(t, |x, y| img.get(x as usize, y as usize))
+}
+
+/// [`read_taps`] of the texels `p(column, row)` gives.
+#[inline(always)]
+pub(super) fn read_taps_by(t: &Taps, p: impl Fn(u32, u32) -> [f32; 3]) -> [f32; 3] {
     let (a, b, c, d) = (p(t.xa, t.ya), p(t.xb, t.ya), p(t.xa, t.yb), p(t.xb, t.yb));
     let (fx, fy) = (t.fx, t.fy);
     std::array::from_fn(|k| {

@@ -7,6 +7,7 @@
 
 mod analytic;
 mod map;
+mod map_sun;
 pub mod procedural;
 mod sampling;
 pub mod tools;

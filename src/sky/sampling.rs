@@ -1,8 +1,11 @@
-//! The sun of an analytic sky as a light to sample (next-event estimation at rough water hits,
-//! combined with the BSDF's own samples by multiple importance sampling). The sky's radiance
-//! splits exactly into the sky without its disc plus the disc's part, full minus smooth (both
-//! clipped as the sky is, so a clipped sun stays clipped); [`SunLight::seen`] gives that part,
-//! and the cone it is sampled over covers it.
+//! The sun of a sky as a light to sample (next-event estimation at rough water hits, combined
+//! with the BSDF's own samples by multiple importance sampling). The sky's radiance splits
+//! exactly into a smooth sky plus the sun's part, which [`SunLight::seen`] gives and the cone
+//! it is sampled over covers:
+//! - an analytic sky: the sky minus the same sky without its disc (both clipped as the sky is,
+//!   so a clipped sun stays clipped);
+//! - a map: in a window of texels around its brightest, the luminance each has above a cap,
+//!   sampled in proportion to its lookup (`map_sun.rs`).
 //!
 //! On a dome (the paper's 200 km) the sky is looked up where a ray meets the dome, seen from
 //! the camera, so from a point of the sea kilometres away the disc sits a little elsewhere
@@ -13,9 +16,12 @@
 //! the camera's times the ratio of the two solid angles the same patch of dome subtends
 //! (cos / r^2 at each end).
 
+use std::sync::Arc;
+
 use glam::Vec3;
 
 use super::analytic::Evaluator;
+use super::map_sun::MapSun;
 use super::{SUN_RADIUS_RAD, Sky, SkySource, clip, dome_offset};
 
 /// cos 0.1: see [`SunLight::near`].
@@ -30,53 +36,87 @@ pub struct SunSample {
     pub pdf: f32,
     /// Where the camera sees the dome point it looks at (the sky's lookup direction).
     seen_as: Vec3,
+    /// The sun's radiance there, when sampling needed it.
+    known: Option<Vec3>,
 }
 
-/// The sun's disc, sampled uniformly over the cone of directions that holds it.
-#[derive(Clone, Copy, Debug)]
-pub struct SunLight {
-    dir: Vec3,
-    /// Axes across the cone.
+/// The sun's part of the sky's radiance, and how it is sampled.
+#[derive(Clone, Debug)]
+enum Part {
+    Analytic(Box<AnalyticSun>),
+    /// A map's texels above its cap near its sun.
+    Map(Arc<MapSun>),
+}
+
+/// An analytic sky's sun: the sky minus the same sky without its disc, both clipped at
+/// `clip_luminance`, sampled uniformly over the cone about the disc's centre with axes `u`,
+/// `v` across it.
+#[derive(Clone, Debug)]
+struct AnalyticSun {
+    full: Evaluator,
+    smooth: Evaluator,
+    clip_luminance: f32,
     u: Vec3,
     v: Vec3,
     /// 1 - cos of the cone's half-angle.
     one_minus_cos: f32,
-    /// sin^2 of a hair more than that angle: where [`SunLight::pdf`] is non-zero (tested with
-    /// the cross product, exact near the axis where 1 - cos is not in f32).
+    /// sin^2 of a hair more than that angle: where the density is non-zero (tested with the
+    /// cross product, exact near the axis where 1 - cos is not in f32).
     sin2_support: f32,
-    full: Evaluator,
-    smooth: Evaluator,
-    clip_luminance: f32,
+}
+
+impl AnalyticSun {
+    /// The cone's density per steradian.
+    fn pdf(&self) -> f32 {
+        1.0 / (std::f32::consts::TAU * self.one_minus_cos)
+    }
+}
+
+/// The sun of a sky, to sample.
+#[derive(Clone, Debug)]
+pub struct SunLight {
+    /// The sun's centre (a map's brightest texel) as the camera sees it.
+    dir: Vec3,
+    part: Part,
     scale: f32,
     /// Earth radius, camera height and dome altitude, m, when the sky is on a dome.
     dome: Option<(f64, f64, f64)>,
 }
 
 impl Sky {
-    /// The sun to sample, for an analytic sky with a sun whose disc is (partly) above the
-    /// horizon; `None` otherwise (a map's sun is not sampled yet). Rays that find the sun by
+    /// The sun to sample: an analytic sky's whose disc is (partly) above the horizon, or a
+    /// map's (see the module doc); `None` for a sky without one. Rays that find the sun by
     /// themselves still see it: sampling only changes the noise.
     pub fn sun_light(&self) -> Option<SunLight> {
-        let SkySource::Analytic { eval, .. } = &self.source else {
-            return None;
+        let (dir, part) = match &self.source {
+            SkySource::Analytic { eval, .. } => {
+                let (dir, _) = eval.disc()?;
+                if dir.y < -SUN_RADIUS_RAD {
+                    return None;
+                }
+                // A hair wider than the disc, so the evaluator's own disc test (its acos is
+                // good to 3e-7 rad) never finds sun outside the sampled cone.
+                let radius = SUN_RADIUS_RAD * 1.001;
+                let u = Vec3::Y.cross(dir).try_normalize().unwrap_or(Vec3::X);
+                let part = Part::Analytic(Box::new(AnalyticSun {
+                    full: *eval,
+                    smooth: eval.without_disc(),
+                    clip_luminance: self.clip_luminance,
+                    u,
+                    v: dir.cross(u),
+                    one_minus_cos: 2.0 * (0.5 * radius).sin().powi(2),
+                    sin2_support: (radius * 1.0005).sin().powi(2),
+                }));
+                (dir, part)
+            }
+            SkySource::Map(img) => {
+                let sun = MapSun::new(img)?;
+                (sun.peak, Part::Map(Arc::new(sun)))
+            }
         };
-        let (dir, _) = eval.disc()?;
-        if dir.y < -SUN_RADIUS_RAD {
-            return None;
-        }
-        // A hair wider than the disc, so the evaluator's own disc test (its acos is good to
-        // 3e-7 rad) never finds sun outside the sampled cone.
-        let r = SUN_RADIUS_RAD * 1.001;
-        let u = Vec3::Y.cross(dir).try_normalize().unwrap_or(Vec3::X);
         Some(SunLight {
             dir,
-            u,
-            v: dir.cross(u),
-            one_minus_cos: 2.0 * (0.5 * r).sin().powi(2),
-            sin2_support: (r * 1.0005).sin().powi(2),
-            full: *eval,
-            smooth: eval.without_disc(),
-            clip_luminance: self.clip_luminance,
+            part,
             scale: self.scale,
             dome: self
                 .dome_altitude_m
@@ -91,31 +131,42 @@ impl SunLight {
         self.dir
     }
 
-    /// A direction in the cone, uniform in solid angle, from two uniform numbers.
-    fn sample_cone(&self, u1: f32, u2: f32) -> Vec3 {
-        let k = u1 * self.one_minus_cos;
-        let cos = 1.0 - k;
-        let sin = (k * (2.0 - k)).max(0.0).sqrt();
-        let (s, c) = (std::f32::consts::TAU * u2).sin_cos();
-        (cos * self.dir + sin * (c * self.u + s * self.v)).normalize()
-    }
-
-    /// The density of the cone's samples at camera direction `s`, per steradian (zero outside
-    /// the cone; its support is wider than the cone by rounding's reach, where the sun has no
-    /// radiance).
-    fn pdf_cone(&self, s: Vec3) -> f32 {
-        if s.dot(self.dir) > 0.0 && s.cross(self.dir).length_squared() <= self.sin2_support {
-            1.0 / (std::f32::consts::TAU * self.one_minus_cos)
-        } else {
-            0.0
+    /// A camera direction towards the sun from two uniform numbers.
+    fn sample_camera(&self, u1: f32, u2: f32) -> Vec3 {
+        match &self.part {
+            Part::Analytic(a) => {
+                // Uniform in solid angle over the cone.
+                let k = u1 * a.one_minus_cos;
+                let cos = 1.0 - k;
+                let sin = (k * (2.0 - k)).max(0.0).sqrt();
+                let (s, c) = (std::f32::consts::TAU * u2).sin_cos();
+                (cos * self.dir + sin * (c * a.u + s * a.v)).normalize()
+            }
+            Part::Map(sun) => sun.sample(u1, u2),
         }
     }
 
-    /// The sun's part of the sky's radiance seen along camera direction `s`.
-    fn radiance_cone(&self, s: Vec3) -> Vec3 {
-        let full = clip(self.full.radiance(s).to_array(), self.clip_luminance);
-        let smooth = clip(self.smooth.radiance(s).to_array(), self.clip_luminance);
-        self.scale * (Vec3::from(full) - Vec3::from(smooth)).max(Vec3::ZERO)
+    /// The density of [`Self::sample_camera`] at camera direction `s`, per steradian, and the
+    /// sun's part of the sky's radiance there (both zero where the sun has no part; for the
+    /// analytic cone the support is wider than it by rounding's reach, where the disc has no
+    /// radiance).
+    fn camera_pdf_and_radiance(&self, s: Vec3) -> (f32, Vec3) {
+        match &self.part {
+            Part::Analytic(a) => {
+                if !(s.dot(self.dir) > 0.0 && s.cross(self.dir).length_squared() <= a.sin2_support)
+                {
+                    return (0.0, Vec3::ZERO);
+                }
+                let full = clip(a.full.radiance(s).to_array(), a.clip_luminance);
+                let smooth = clip(a.smooth.radiance(s).to_array(), a.clip_luminance);
+                let radiance = (Vec3::from(full) - Vec3::from(smooth)).max(Vec3::ZERO);
+                (a.pdf(), self.scale * radiance)
+            }
+            Part::Map(sun) => {
+                let radiance = sun.radiance(s);
+                (sun.pdf(s, radiance), self.scale * radiance)
+            }
+        }
     }
 
     /// Whether `org` (camera-relative, the sky's convention) is the camera itself, which sees
@@ -147,8 +198,17 @@ impl SunLight {
     /// A direction from `org` towards the sun, from two uniform numbers: the direction, its
     /// density per steradian, and where the camera sees it (for [`Self::radiance`]).
     pub fn sample(&self, org: Vec3, u1: f32, u2: f32) -> SunSample {
-        let s = self.sample_cone(u1, u2);
-        let pdf = self.pdf_cone(s);
+        let s = self.sample_camera(u1, u2);
+        // The analytic sun's density is the cone's wherever it lands and its radiance is asked
+        // only where the sample is used (two evaluations of the sky); a map's density is its
+        // radiance's.
+        let (pdf, known) = match &self.part {
+            Part::Analytic(a) => (a.pdf(), None),
+            Part::Map(_) => {
+                let (pdf, radiance) = self.camera_pdf_and_radiance(s);
+                (pdf, Some(radiance))
+            }
+        };
         let (d, pdf) = match self.dome {
             Some((r, h, alt)) if !self.at_camera(org, h) => {
                 let camera = Vec3::new(0.0, h as f32, 0.0);
@@ -158,17 +218,23 @@ impl SunLight {
             }
             _ => (s, pdf),
         };
-        SunSample { d, pdf, seen_as: s }
+        SunSample {
+            d,
+            pdf,
+            seen_as: s,
+            known,
+        }
     }
 
-    /// The sun's radiance along a sample (two evaluations of the sky: asked only where the
-    /// sample is used).
+    /// The sun's radiance along a sample.
     pub fn radiance(&self, sample: &SunSample) -> Vec3 {
-        self.radiance_cone(sample.seen_as)
+        sample
+            .known
+            .unwrap_or_else(|| self.camera_pdf_and_radiance(sample.seen_as).1)
     }
 
     /// The density [`Self::sample`] gives direction `d` from `org`, and the sun's radiance
-    /// along it (both zero where the ray does not see the disc).
+    /// along it (both zero where the ray does not see the sun).
     pub fn seen(&self, org: Vec3, d: Vec3) -> (f32, Vec3) {
         if !self.near(d) {
             return (0.0, Vec3::ZERO);
@@ -180,17 +246,19 @@ impl SunLight {
             }
             _ => (d, 1.0),
         };
-        let pdf = self.pdf_cone(s);
+        let (pdf, radiance) = self.camera_pdf_and_radiance(s);
         if pdf == 0.0 {
             return (0.0, Vec3::ZERO);
         }
-        (pdf * jacobian, self.radiance_cone(s))
+        (pdf * jacobian, radiance)
     }
 }
 
 #[cfg(test)]
 mod tests {
+    use super::super::lookup;
     use super::*;
+    use crate::color::luminance;
     use crate::config::AnalyticSky;
     use crate::rng::Rng;
 
@@ -271,6 +339,117 @@ mod tests {
                 "{d}"
             );
         }
+    }
+
+    /// The clear sky of [`sky`] as a 2048-wide map, whose disc covers a few texels.
+    fn map_sky() -> Sky {
+        let AnalyticSky::Clear { .. } = AnalyticSky::default() else {
+            unreachable!()
+        };
+        let SkySource::Analytic { model, .. } = sky().source else {
+            unreachable!()
+        };
+        Sky {
+            source: SkySource::Map(super::super::rasterize(&model, 2048)),
+            ..sky()
+        }
+    }
+
+    #[test]
+    fn a_map_is_its_capped_self_plus_the_suns_part_where_samples_land() {
+        let sky = map_sky();
+        let sun = sky.sun_light().unwrap();
+        let SkySource::Map(img) = &sky.source else {
+            unreachable!()
+        };
+        // Every direction within 0.06 rad of the sun, on a grid finer than the texels: the
+        // part is non-negative and under the lookup, the rest is at most a thousandth of the
+        // peak (the cap here: the map's median is far below), and the density is the part's.
+        let peak = img.pixels.iter().map(|&c| luminance(c)).fold(0.0, f32::max);
+        let u = Vec3::Y.cross(sun.direction()).normalize();
+        let v = sun.direction().cross(u);
+        let (mut with_part, mut with_rest) = (0, 0);
+        for a in -120..=120 {
+            for b in -120..=120 {
+                let d = (sun.direction() + 5e-4 * (a as f32 * u + b as f32 * v)).normalize();
+                let whole = lookup(img, d);
+                let (pdf, part) = sun.seen(Vec3::new(0.0, 2.0, 0.0), d);
+                assert!(part.min_element() >= 0.0 && (whole - part).min_element() >= -1e-6);
+                let rest = luminance((whole - part).to_array());
+                assert!(rest <= 1e-3 * peak * 1.0001, "{d}: {rest} over the cap");
+                assert_eq!(pdf > 0.0, part.max_element() > 0.0, "{d}");
+                with_part += usize::from(part.max_element() > 0.0);
+                with_rest += usize::from(rest > 0.5e-3 * peak);
+            }
+        }
+        assert!(
+            with_part > 100 && with_rest > 100,
+            "{with_part} {with_rest}"
+        );
+        // Every sample lands where the sun has radiance, and carries radiance over density
+        // within a few per cent of the mean (the map's texel size varies with elevation).
+        let mut rng = Rng::keyed(&[3]);
+        let org = Vec3::new(0.0, 2.0, 0.0);
+        let ratios: Vec<f32> = (0..2000)
+            .map(|_| {
+                let s = sun.sample(org, rng.f32(), rng.f32());
+                luminance(sun.radiance(&s).to_array()) / s.pdf
+            })
+            .collect();
+        let mean = ratios.iter().sum::<f32>() / ratios.len() as f32;
+        assert!(
+            ratios.iter().all(|r| (r / mean - 1.0).abs() < 0.02),
+            "{:?}",
+            ratios
+                .iter()
+                .fold((f32::MAX, 0.0f32), |(a, b), &r| (a.min(r), b.max(r)))
+        );
+    }
+
+    #[test]
+    fn a_maps_sun_sampled_integrates_its_part() {
+        // Sampling the cone integrates the part as a quadrature over it does.
+        let sky = map_sky();
+        let sun = sky.sun_light().unwrap();
+        let org = Vec3::new(0.0, 2.0, 0.0);
+        let mut rng = Rng::keyed(&[2]);
+        let n = 100_000;
+        let mut sampled = Vec3::ZERO;
+        for _ in 0..n {
+            let s = sun.sample(org, rng.f32(), rng.f32());
+            sampled += sun.radiance(&s) / s.pdf / n as f32;
+        }
+        let u = Vec3::Y.cross(sun.direction()).normalize();
+        let v = sun.direction().cross(u);
+        let (step, mut quadrature) = (2e-4f32, Vec3::ZERO);
+        for a in -100..=100 {
+            for b in -100..=100 {
+                let d = sun.direction() + step * (a as f32 * u + b as f32 * v);
+                // d is off the unit sphere by under 2e-4: its solid angle per cell is
+                // step^2 / |d|^3.
+                let l = d.length();
+                quadrature += sun.seen(org, d / l).1 * step * step / (l * l * l);
+            }
+        }
+        assert!(
+            ((sampled - quadrature) / quadrature).abs().max_element() < 0.01,
+            "{sampled} vs {quadrature}"
+        );
+    }
+
+    #[test]
+    fn maps_without_a_sun_have_none_to_sample() {
+        let sky = Sky {
+            source: SkySource::Map(super::super::rasterize(
+                &AnalyticSky::Gradient {
+                    zenith: [0.3, 0.5, 1.0],
+                    horizon: [1.0, 1.0, 1.0],
+                },
+                256,
+            )),
+            ..sky()
+        };
+        assert!(sky.sun_light().is_none());
     }
 
     #[test]
