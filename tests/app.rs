@@ -585,3 +585,49 @@ fn study_plans_runs_through_gnu_parallel_resumes_and_summarizes() {
     assert_eq!(v["missing"], serde_json::json!([1, 3]), "{out}");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn ocean_splits_its_slopes_for_a_footprint_as_filtered_normals_do() {
+    use vastocean::app::ocean::{OceanJob, run};
+    let split = |w: f64| {
+        let job = OceanJob {
+            params: vastocean::ocean::OceanParams::default(),
+            seed: 1,
+            png: None,
+            profile: None,
+            footprint_m: Some(w),
+        };
+        let report = run(&job).unwrap();
+        let fp = report.footprint.clone().unwrap();
+        (report.summary.mss_grid, fp)
+    };
+    // No footprint resolves everything; a kilometre-wide one leaves every layer to the lobe;
+    // in between the resolved share falls with the width, and the two always sum to the
+    // realization's slopes (the grid's, by Parseval).
+    let (grid, none) = split(0.0);
+    assert!(none.unresolved_mss.abs() < 1e-12 && none.layers.iter().all(|l| l.weight == 1.0));
+    let mut last = none.resolved_mss;
+    for w in [0.1, 1.0, 10.0, 1000.0] {
+        let (_, fp) = split(w);
+        let sum = fp.resolved_mss + fp.unresolved_mss;
+        assert!((sum / grid - 1.0).abs() < 1e-3, "{w}: {sum} vs {grid}");
+        assert!(
+            fp.resolved_mss < last,
+            "{w}: {} not below {last}",
+            fp.resolved_mss
+        );
+        last = fp.resolved_mss;
+    }
+    let (_, far) = split(1000.0);
+    assert!(far.resolved_mss < 1e-3 * grid, "{far:?}");
+    assert!(
+        run(&OceanJob {
+            params: vastocean::ocean::OceanParams::default(),
+            seed: 1,
+            png: None,
+            profile: None,
+            footprint_m: Some(-1.0),
+        })
+        .is_err()
+    );
+}

@@ -8,6 +8,7 @@ use serde::Serialize;
 
 use super::AppError;
 use crate::ocean::repeat::{RepeatCorrelation, profile_csv, repeat_correlation};
+use crate::ocean::slopes::SurfaceSlopes;
 use crate::ocean::{OceanParams, OceanSummary, Surface, write_preview_png};
 
 /// An ocean job.
@@ -20,6 +21,60 @@ pub struct OceanJob {
     pub png: Option<(PathBuf, Option<f64>, u32)>,
     /// Write the surface along a line here: from (x0, z0) to (x1, z1), world metres, n points.
     pub profile: Option<(PathBuf, [f64; 2], [f64; 2], usize)>,
+    /// Split the slopes for a pixel footprint this wide on the sea, m.
+    pub footprint_m: Option<f64>,
+}
+
+/// The mean square slope as filtered normals split it for one footprint: what the layers'
+/// mapped normals keep and what the rough lobe takes (`crate::ocean::slopes`).
+#[derive(Clone, Debug, Serialize)]
+pub struct FootprintSlopes {
+    /// The footprint's width on the sea, m, and the std of the Gaussian that filters it.
+    pub width_m: f64,
+    pub sigma_m: f64,
+    pub resolved_mss: f64,
+    pub unresolved_mss: f64,
+    pub layers: Vec<LayerSplit>,
+}
+
+/// One layer's share of [`FootprintSlopes`].
+#[derive(Clone, Debug, Serialize)]
+pub struct LayerSplit {
+    /// The factor its fields are read with (0: not read at all).
+    pub weight: f64,
+    pub resolved_mss: f64,
+    pub unresolved_mss: f64,
+}
+
+impl FootprintSlopes {
+    /// The split a filtered render makes for a footprint `width_m` wide, with the default
+    /// filter width.
+    pub fn new(surface: &Surface, width_m: f64) -> FootprintSlopes {
+        let slopes = SurfaceSlopes::new(surface);
+        let sigma_m = width_m * crate::config::render::FILTER_WIDTH_BOX as f64;
+        let split = slopes.split(sigma_m as f32);
+        let layers: Vec<LayerSplit> = slopes
+            .layers()
+            .iter()
+            .zip(split.weights)
+            .map(|(bands, w)| {
+                let [xx, _, zz] = bands.total();
+                let resolved = (w as f64).powi(2) * (xx + zz);
+                LayerSplit {
+                    weight: w as f64,
+                    resolved_mss: resolved,
+                    unresolved_mss: xx + zz - resolved,
+                }
+            })
+            .collect();
+        FootprintSlopes {
+            width_m,
+            sigma_m,
+            resolved_mss: layers.iter().map(|l| l.resolved_mss).sum(),
+            unresolved_mss: layers.iter().map(|l| l.unresolved_mss).sum(),
+            layers,
+        }
+    }
 }
 
 /// What was generated.
@@ -32,6 +87,9 @@ pub struct OceanReport {
     /// Where the sea state lies outside the range the spectrum's models were fitted on (see
     /// `crate::ocean::Spectrum::range_notes`).
     pub range_notes: Vec<String>,
+    /// With `--footprint`: the slopes' split for it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub footprint: Option<FootprintSlopes>,
     #[serde(skip)]
     pub params: OceanParams,
     #[serde(skip)]
@@ -94,6 +152,13 @@ pub fn run(job: &OceanJob) -> Result<OceanReport, AppError> {
         }
         super::check_outputs(std::slice::from_ref(path))?;
     }
+    if let Some(w) = job.footprint_m
+        && !(w >= 0.0 && w.is_finite())
+    {
+        return Err(AppError::input(format!(
+            "--footprint is a width in metres, finite and >= 0 (got {w})"
+        )));
+    }
     let surface = Surface::new(&job.params, job.seed)?;
     let summary = surface.summary().clone();
     let sampler = surface.sampler([0.0, 0.0]);
@@ -118,6 +183,7 @@ pub fn run(job: &OceanJob) -> Result<OceanReport, AppError> {
         summary,
         repeat_correlation,
         range_notes,
+        footprint: job.footprint_m.map(|w| FootprintSlopes::new(&surface, w)),
         params: job.params.clone(),
         png: job.png.as_ref().map(|p| p.0.clone()),
     })
@@ -184,6 +250,20 @@ impl fmt::Display for OceanReport {
                 l.mss_lookup,
                 100.0 * (l.mss_lookup / l.mss_spectrum - 1.0)
             )?;
+        }
+        if let Some(fp) = &self.footprint {
+            writeln!(
+                f,
+                "    through a {} m footprint (Gaussian std {:.3} m): {:.5} resolved by the mapped normals, {:.5} in the rough lobe",
+                fp.width_m, fp.sigma_m, fp.resolved_mss, fp.unresolved_mss
+            )?;
+            for (i, l) in fp.layers.iter().enumerate() {
+                writeln!(
+                    f,
+                    "    layer {i}: {:.5} resolved, {:.5} in the lobe (fields read x {:.3})",
+                    l.resolved_mss, l.unresolved_mss, l.weight
+                )?;
+            }
         }
         match s.hs_target_m {
             Some(t) => writeln!(f, "  Hs                {:.3} m (target {t:.3} m)", s.hs_m)?,

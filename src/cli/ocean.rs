@@ -76,6 +76,11 @@ pub struct OceanArgs {
     /// Where --profile writes its CSV.
     #[arg(long, requires = "profile")]
     csv: Option<PathBuf>,
+    /// Split the mean square slope as `--normals filtered` does for a pixel footprint W metres
+    /// wide on the sea (the default filter width, a Gaussian of std W / sqrt 12): what the
+    /// mapped normals resolve and what the rough lobe takes, per layer.
+    #[arg(long, value_name = "W")]
+    footprint: Option<f64>,
     /// Print the result as one JSON object on stdout instead of the report.
     #[arg(long)]
     pub json: bool,
@@ -181,6 +186,7 @@ impl OceanArgs {
                 (Some((from, to, n)), Some(csv)) => Some((csv.clone(), *from, *to, *n)),
                 _ => None,
             },
+            footprint_m: self.footprint,
         }
     }
 }
