@@ -51,6 +51,7 @@ bench: setup
 bench-report: build
 	./target/release/vastocean bench bvh --out benches/results/bvh
 	./target/release/vastocean bench accuracy --out benches/results/accuracy
+	./target/release/vastocean bench accuracy --filtered --out benches/results/accuracy-filtered
 
 # The paper's study (docs/comparison.md): plans STUDY if it has no plan
 # yet (STUDY_FLAGS go to `study plan`), runs its unfinished cases with GNU parallel, one case per
