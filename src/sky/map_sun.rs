@@ -22,8 +22,13 @@ use crate::color::luminance;
 use crate::equirect;
 use crate::image_io::RgbImage;
 
-/// Half the angular size of the window of texels that may hold the sun, rad.
+/// The angle from the brightest texel within which texels may hold the sun, rad.
 const WINDOW_RAD: f64 = 0.05;
+
+/// How far from the brightest texel a direction may still read the sun: the window plus a
+/// lookup's reach (sqrt 2 texel pitches), within `SunLight::near`'s 0.1 rad with room for the
+/// dome's parallax. Maps too coarse for it (under about 120 rows) have no sun to sample.
+const MAX_REACH_RAD: f64 = 0.09;
 
 /// The part of a map above its cap near its sun.
 #[derive(Clone, Debug)]
@@ -60,10 +65,17 @@ impl MapSun {
         if !(peak >= SUN_CONTRAST as f32 * median && peak > 0.0) {
             return None;
         }
+        if WINDOW_RAD + std::f64::consts::SQRT_2 * std::f64::consts::PI / h as f64 > MAX_REACH_RAD {
+            return None;
+        }
         let cap = (SUN_CONTRAST as f32 * median).max(1e-3 * peak);
         let (pj, pi) = (peak_at / w, peak_at % w);
-        // Rows within the window's angle of the peak's, columns within it at the window's row
-        // farthest from the equator.
+        let centre = equirect::direction64(
+            equirect::row_elevation(pj, h),
+            equirect::column_azimuth(pi, w),
+        );
+        // A box of rows within the window's angle of the peak's and columns within it at the
+        // box's row farthest from the equator; of it, the texels within the window's angle.
         let reach = (WINDOW_RAD * h as f64 / std::f64::consts::PI).ceil() as usize;
         if pj < reach + 1 || pj + reach + 2 > h {
             return None;
@@ -83,9 +95,14 @@ impl MapSun {
         let (mut lit, mut cumulative, mut sum) = (Vec::new(), Vec::new(), 0.0f64);
         for r in 0..rows {
             for c in 0..cols {
-                let texel = img.get((col0 + c) % w, row0 + r);
+                let (i, j) = ((col0 + c) % w, row0 + r);
+                let texel = img.get(i, j);
                 let l = luminance(texel);
-                if l > cap {
+                let at = equirect::direction64(
+                    equirect::row_elevation(j, h),
+                    equirect::column_azimuth(i, w),
+                );
+                if l > cap && at.angle_between(centre) <= WINDOW_RAD {
                     let k = r * cols + c;
                     part[k] = texel.map(|v| v * (1.0 - cap / l));
                     sum += luminance(part[k]) as f64;
@@ -94,10 +111,9 @@ impl MapSun {
                 }
             }
         }
-        let peak = equirect::direction64(
-            equirect::row_elevation(pj, h),
-            equirect::column_azimuth(pi, w),
-        );
+        if lit.is_empty() {
+            return None;
+        }
         Some(MapSun {
             w,
             h,
@@ -108,7 +124,7 @@ impl MapSun {
             part,
             lit,
             cumulative,
-            peak: peak.as_vec3(),
+            peak: centre.as_vec3(),
         })
     }
 

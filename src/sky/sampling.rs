@@ -343,15 +343,62 @@ mod tests {
 
     /// The clear sky of [`sky`] as a 2048-wide map, whose disc covers a few texels.
     fn map_sky() -> Sky {
-        let AnalyticSky::Clear { .. } = AnalyticSky::default() else {
-            unreachable!()
-        };
         let SkySource::Analytic { model, .. } = sky().source else {
             unreachable!()
         };
+        map_of(model)
+    }
+
+    /// `model` rasterized into a 2048-wide map.
+    fn map_of(model: AnalyticSky) -> Sky {
         Sky {
             source: SkySource::Map(super::super::rasterize(&model, 2048)),
             ..sky()
+        }
+    }
+
+    #[test]
+    fn a_maps_sun_reaches_no_farther_than_near_says_for_a_low_and_a_high_sun() {
+        // A glow 50 times the sky out to 0.2 rad round a small bright sun puts texels above
+        // the cap far beyond the disc: the part stops at the window, within what `near` lets a
+        // ray see (outside it a ray's MIS weight would not be asked, and the sun would be
+        // counted twice), for a sun near the equator and one near the zenith, where the
+        // window's columns are widest.
+        for elevation in [20.0f64, 80.0] {
+            let sun_dir = crate::equirect::direction64(elevation.to_radians(), 0.5);
+            let (w, h) = (2048, 1024);
+            let mut img = crate::image_io::RgbImage::new(w, h);
+            for j in 0..h {
+                for i in 0..w {
+                    let d = crate::equirect::direction64(
+                        crate::equirect::row_elevation(j, h),
+                        crate::equirect::column_azimuth(i, w),
+                    );
+                    let g = d.angle_between(sun_dir);
+                    let l = 1.0 + 50.0 * f32::from(g < 0.2) + 1e4 * f32::from(g < 0.005);
+                    img.pixels[j * w + i] = [l; 3];
+                }
+            }
+            let sky = Sky {
+                source: SkySource::Map(img),
+                ..sky()
+            };
+            let sun = sky.sun_light().unwrap();
+            let u = Vec3::Y.cross(sun.direction()).normalize();
+            let v = sun.direction().cross(u);
+            let mut far = 0.0f32;
+            for a in -100..=100 {
+                for b in -100..=100 {
+                    let d = (sun.direction() + 1.5e-3 * (a as f32 * u + b as f32 * v)).normalize();
+                    if sun.camera_pdf_and_radiance(d).1.max_element() > 0.0 {
+                        assert!(sun.near(d), "{elevation}: {d} has sun but is not near");
+                        far = far.max(d.angle_between(sun.direction()));
+                    }
+                }
+            }
+            // The glow fills the window: the part reaches out to it, and no farther than it
+            // and a lookup's reach.
+            assert!(far > 0.045 && far < 0.056, "{elevation}: {far}");
         }
     }
 
