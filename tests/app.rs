@@ -206,6 +206,27 @@ fn tiny_compare_runs_end_to_end_and_writes_every_file() {
         s.scenarios[0].triangles, s.scenarios[1].triangles,
         "both high scenarios trace one mesh"
     );
+    // Over two seas, the filtered scenario is pooled beside the paper's.
+    let pooled = app::compare::realizations::run(
+        &app::compare::CompareJob {
+            out: dir.join("pooled"),
+            ..job.clone()
+        },
+        2,
+    )
+    .unwrap();
+    let filtered = pooled.std_low_filtered_corrected.unwrap();
+    assert!(
+        filtered.value.is_finite() && filtered.value > 0.0,
+        "{filtered:?}"
+    );
+    assert!(
+        pooled
+            .realizations
+            .iter()
+            .all(|r| r.variance_corrected.low_filtered.is_some())
+    );
+    assert!(pooled.to_string().contains("low filtered"));
     let _ = std::fs::remove_dir_all(dir);
 }
 

@@ -35,6 +35,9 @@ pub struct Variances {
     pub low_mapped: f64,
     pub low_unmapped: f64,
     pub noise_floor: f64,
+    /// With `--filtered`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub low_filtered: Option<f64>,
 }
 
 /// `summary.json` of a comparison over realizations. JSON has no infinity: an unbounded
@@ -61,6 +64,9 @@ pub struct RealizationsSummary {
     pub std_low_mapped_corrected: Interval,
     pub std_low_unmapped_corrected: Interval,
     pub std_noise_floor_corrected: Interval,
+    /// With `--filtered`: the low tessellation with filtered normals, pooled the same way.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub std_low_filtered_corrected: Option<Interval>,
     pub rows_deg: (f64, f64),
     pub spp: u32,
     pub seconds_total: f64,
@@ -101,7 +107,8 @@ fn pool(job: &CompareJob, runs: Vec<(u64, CompareSummary)>, seconds: f64) -> Rea
     let realizations: Vec<Realization> = runs
         .iter()
         .map(|(seed, s)| {
-            let v = |i: usize| s.estimates.scenarios[i].variance_corrected.value;
+            let e = &s.estimates.scenarios;
+            let v = |i: usize| e[i].variance_corrected.value;
             Realization {
                 ocean_seed: *seed,
                 improvement_ratio: s.improvement.corrected,
@@ -111,6 +118,7 @@ fn pool(job: &CompareJob, runs: Vec<(u64, CompareSummary)>, seconds: f64) -> Rea
                     low_mapped: v(1),
                     low_unmapped: v(2),
                     noise_floor: v(3),
+                    low_filtered: e.get(4).map(|f| f.variance_corrected.value),
                 },
                 summary: job
                     .out
@@ -142,6 +150,11 @@ fn pool(job: &CompareJob, runs: Vec<(u64, CompareSummary)>, seconds: f64) -> Rea
         std_low_mapped_corrected: pooled_std(&column(|v| v.low_mapped)),
         std_low_unmapped_corrected: pooled_std(&column(|v| v.low_unmapped)),
         std_noise_floor_corrected: pooled_std(&column(|v| v.noise_floor)),
+        std_low_filtered_corrected: realizations
+            .iter()
+            .map(|r| r.variance_corrected.low_filtered)
+            .collect::<Option<Vec<f64>>>()
+            .map(|v| pooled_std(&v)),
         realizations,
         rows_deg: job.rows_deg,
         spp: job.scene.render.spp,
@@ -181,6 +194,9 @@ impl fmt::Display for RealizationsSummary {
             std(&self.std_low_unmapped_corrected),
             std(&self.std_noise_floor_corrected)
         )?;
+        if let Some(filtered) = &self.std_low_filtered_corrected {
+            writeln!(f, "  low filtered {}", std(filtered))?;
+        }
         let pooled = Interval {
             value: self.improvement_ratio_corrected,
             ci: self.improvement_ratio_ci,
