@@ -452,6 +452,9 @@ mod tests {
         let text = c.to_toml().unwrap();
         assert!(text.contains("dome_altitude_m = inf"), "{text}");
         assert_eq!(toml::from_str::<SceneConfig>(&text).unwrap(), c);
+        // JSON (a pass file's header) writes the infinity as null and reads it back.
+        let json = serde_json::to_string(&c).unwrap();
+        assert_eq!(serde_json::from_str::<SceneConfig>(&json).unwrap(), c);
         let c: SceneConfig = toml::from_str("[sky]\ndome_altitude_m = 5e4\n").unwrap();
         assert_eq!(c.sky.dome_altitude_m, Some(5e4));
         let c: SceneConfig = toml::from_str("[sky]\ndome_altitude_m = -inf\n").unwrap();

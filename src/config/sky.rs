@@ -106,9 +106,11 @@ mod dome_altitude {
         s.serialize_f64(v.unwrap_or(f64::INFINITY))
     }
 
+    /// `inf` and JSON's `null` (which is what serde_json writes for an infinity: pass files
+    /// carry the scene) are a sky at infinity.
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
-        let v = f64::deserialize(d)?;
-        Ok((v != f64::INFINITY).then_some(v))
+        let v = Option::<f64>::deserialize(d)?;
+        Ok(v.filter(|&v| v != f64::INFINITY))
     }
 }
 

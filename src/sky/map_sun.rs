@@ -5,14 +5,14 @@
 //! luminance above the cap (hue kept) to the sun's part and keeps the cap, and since the
 //! bilinear lookup is linear in the texels, every lookup is the capped map's plus the part's.
 //! The cap is the larger of [`SUN_CONTRAST`] times the median sky and a thousandth of the
-//! peak: what stays in the map is at most ten times the median sky, which the BSDF's own
-//! samples find without much noise. A map whose peak is under [`SUN_CONTRAST`] times its
-//! median has no sun.
+//! peak: what stays in the window is at most that, which the BSDF's own samples find without
+//! much noise. A map whose peak is under [`SUN_CONTRAST`] times its median has no sun.
 //!
 //! Sampling: a texel of the part with probability in proportion to its luminance, then a point
 //! of its bilinear footprint by a tent in each axis of the map. The density in map coordinates
-//! is then the part's own bilinear lookup over the sum of the texels' luminances, so a sample
-//! carries nearly the same radiance over density wherever it lands.
+//! is then the part's own bilinear lookup over the sum of the texels' luminances, so a
+//! sample's radiance over density varies only with its texel's solid angle (the cosine of its
+//! elevation) and hue: by a few per cent over the few texels of a sun.
 
 use glam::Vec3;
 
@@ -24,11 +24,6 @@ use crate::image_io::RgbImage;
 
 /// The angle from the brightest texel within which texels may hold the sun, rad.
 const WINDOW_RAD: f64 = 0.05;
-
-/// How far from the brightest texel a direction may still read the sun: the window plus a
-/// lookup's reach (sqrt 2 texel pitches), within `SunLight::near`'s 0.1 rad with room for the
-/// dome's parallax. Maps too coarse for it (under about 120 rows) have no sun to sample.
-const MAX_REACH_RAD: f64 = 0.09;
 
 /// The part of a map above its cap near its sun.
 #[derive(Clone, Debug)]
@@ -63,9 +58,6 @@ impl MapSun {
             .max_by(|a, b| a.1.total_cmp(&b.1))?;
         let median = median_luminance_above_horizon(img);
         if !(peak >= SUN_CONTRAST as f32 * median && peak > 0.0) {
-            return None;
-        }
-        if WINDOW_RAD + std::f64::consts::SQRT_2 * std::f64::consts::PI / h as f64 > MAX_REACH_RAD {
             return None;
         }
         let cap = (SUN_CONTRAST as f32 * median).max(1e-3 * peak);
@@ -126,6 +118,12 @@ impl MapSun {
             cumulative,
             peak: centre.as_vec3(),
         })
+    }
+
+    /// How far from the brightest texel (as the camera sees it) a direction may still read
+    /// the part: the window plus a lookup's reach, sqrt 2 texel pitches.
+    pub(super) fn reach_rad(&self) -> f32 {
+        (WINDOW_RAD + std::f64::consts::SQRT_2 * std::f64::consts::PI / self.h as f64) as f32
     }
 
     /// The part's texel at map column `i`, row `j` (zero outside the window).

@@ -24,8 +24,9 @@ use super::analytic::Evaluator;
 use super::map_sun::MapSun;
 use super::{SUN_RADIUS_RAD, Sky, SkySource, clip, dome_offset};
 
-/// cos 0.1: see [`SunLight::near`].
-const NEAR_COS: f32 = 0.995_004_2;
+/// How far from the sun's centre a direction may see the sun through the dome's parallax,
+/// beyond where the camera sees it: see [`SunLight::near`].
+const PARALLAX_RAD: f32 = 0.095;
 
 /// A direction towards the sun from [`SunLight::sample`].
 #[derive(Clone, Copy, Debug)]
@@ -77,6 +78,8 @@ impl AnalyticSun {
 pub struct SunLight {
     /// The sun's centre (a map's brightest texel) as the camera sees it.
     dir: Vec3,
+    /// The cosine of the widest angle from `dir` at which a direction may see the sun.
+    near_cos: f32,
     part: Part,
     scale: f32,
     /// Earth radius, camera height and dome altitude, m, when the sky is on a dome.
@@ -88,7 +91,7 @@ impl Sky {
     /// map's (see the module doc); `None` for a sky without one. Rays that find the sun by
     /// themselves still see it: sampling only changes the noise.
     pub fn sun_light(&self) -> Option<SunLight> {
-        let (dir, part) = match &self.source {
+        let (dir, reach, part) = match &self.source {
             SkySource::Analytic { eval, .. } => {
                 let (dir, _) = eval.disc()?;
                 if dir.y < -SUN_RADIUS_RAD {
@@ -107,15 +110,16 @@ impl Sky {
                     one_minus_cos: 2.0 * (0.5 * radius).sin().powi(2),
                     sin2_support: (radius * 1.0005).sin().powi(2),
                 }));
-                (dir, part)
+                (dir, radius, part)
             }
             SkySource::Map(img) => {
                 let sun = MapSun::new(img)?;
-                (sun.peak, Part::Map(Arc::new(sun)))
+                (sun.peak, sun.reach_rad(), Part::Map(Arc::new(sun)))
             }
         };
         Some(SunLight {
             dir,
+            near_cos: (reach + PARALLAX_RAD).min(std::f32::consts::PI).cos(),
             part,
             scale: self.scale,
             dome: self
@@ -185,14 +189,16 @@ impl SunLight {
         (s.dot(normal).abs() / r_cam2) * (r_org2 / d.dot(normal).abs().max(1e-12))
     }
 
-    /// Whether direction `d` (from anywhere in the scene) may see the sun: within 0.1 rad of
-    /// its centre, which holds the disc and its parallax from points of the sea out to 100 km
-    /// (the dome is over 1,000 km away along rays near the horizon for the paper's 200 km;
-    /// lower domes make the reach shorter, not the bound wrong: only the ratio of distances
-    /// matters). Directions farther off are answered without the dome's geometry.
+    /// Whether direction `d` (from anywhere in the scene) may see the sun: within the sun's
+    /// reach as the camera sees it (the disc, or a map's window) plus 0.095 rad of parallax,
+    /// which holds points of the sea out to 100 km (the dome is over 1,000 km away along rays
+    /// near the horizon for the paper's 200 km; lower domes make the reach shorter, not the
+    /// bound wrong: only the ratio of distances matters). Directions farther off are
+    /// answered without the dome's geometry; a direction that does see the sun must be near,
+    /// or its multiple-importance weight would not be asked and the sun counted twice.
     #[inline]
     pub fn near(&self, d: Vec3) -> bool {
-        d.dot(self.dir) > NEAR_COS * d.length()
+        d.dot(self.dir) > self.near_cos * d.length()
     }
 
     /// A direction from `org` towards the sun, from two uniform numbers: the direction, its
@@ -451,6 +457,27 @@ mod tests {
                 .iter()
                 .fold((f32::MAX, 0.0f32), |(a, b), &r| (a.min(r), b.max(r)))
         );
+    }
+
+    #[test]
+    fn a_maps_sun_on_a_dome_is_seen_where_it_is_sampled() {
+        // From a point of the sea 5 km out, under the paper's dome: every sample is near, and
+        // the density `seen` reports for its direction is the sampler's own.
+        let mut sky = map_sky();
+        sky.dome_altitude_m = Some(200e3);
+        let sun = sky.sun_light().unwrap();
+        let org = Vec3::new(-4000.0, 0.3, 3000.0);
+        let mut rng = Rng::keyed(&[4]);
+        let mut off = 0;
+        for _ in 0..5000 {
+            let s = sun.sample(org, rng.f32(), rng.f32());
+            assert!(sun.near(s.d), "{:?}", s.d);
+            let (pdf, l) = sun.seen(org, s.d);
+            off += usize::from((pdf / s.pdf - 1.0).abs() > 1e-2 || l == Vec3::ZERO);
+        }
+        // (Through the dome and back a direction moves by rounding, which the part's density
+        // follows where it falls steeply at the sun's edge.)
+        assert!(off < 50, "{off} of 5000 samples seen elsewhere");
     }
 
     #[test]
