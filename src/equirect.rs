@@ -113,7 +113,13 @@ pub fn row_elevation_deg(j: usize, h: usize) -> f64 {
 /// Solid angle of one texel of row `j` of a `w` x `h` map, steradians.
 #[inline]
 pub fn texel_solid_angle(j: usize, w: usize, h: usize) -> f64 {
-    TAU / w as f64 * PI / h as f64 * row_elevation(j, h).cos()
+    texel_solid_angle_at(row_elevation(j, h).cos(), w, h)
+}
+
+/// Solid angle of a `w` x `h` map's texel at an elevation of cosine `cos_el`, steradians.
+#[inline]
+pub fn texel_solid_angle_at(cos_el: f64, w: usize, h: usize) -> f64 {
+    TAU / w as f64 * PI / h as f64 * cos_el
 }
 
 #[cfg(test)]

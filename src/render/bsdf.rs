@@ -16,7 +16,7 @@ use glam::Vec3;
 
 use super::counters::Counters;
 use super::integrator::{SceneRef, TraceSettings};
-use super::interface::{SurfacePoint, bend_normal, keep_side, surface_point};
+use super::interface::{SurfacePoint, bend_normal, bend_threshold, keep_side, surface_point};
 use super::microfacet::{Lobe, power_heuristic};
 use super::water::{fresnel, reflect, refract};
 use crate::accel::{Hit, Ray};
@@ -127,8 +127,9 @@ impl SceneRef<'_> {
         // The unresolved waves around the resolved normal (filtered normals), and for the
         // `mapped` lobe a normal drawn from them by area, as a point of the pixel would have
         // it, shaded from here on exactly as a mapped normal is.
-        let lobe = Lobe::new(ns, shading.cov);
-        let area_lobe = lobe.filter(|_| settings.filter_lobe == FilterLobe::Mapped);
+        let area_lobe = (settings.filter_lobe == FilterLobe::Mapped)
+            .then(|| Lobe::new(ns, shading.cov))
+            .flatten();
         if let Some(lobe) = &area_lobe {
             c.rough_hits += 1;
             ns = lobe.world(lobe.sample_area(rng.f32(), rng.f32()), false);
@@ -158,9 +159,10 @@ impl SceneRef<'_> {
             s.refracted = Some(None);
             return s;
         }
-        let smith = lobe
-            .filter(|_| settings.filter_lobe == FilterLobe::Smith)
-            .and_then(|_| Lobe::new(ns, shading.cov));
+        // Around the normal the policy left.
+        let smith = (settings.filter_lobe == FilterLobe::Smith)
+            .then(|| Lobe::new(ns, shading.cov))
+            .flatten();
         let Some(lobe) = smith else {
             s.fresnel = fresnel(-d.dot(ns), eta_i, eta_t);
             let r = reflect(d, ns);
@@ -219,7 +221,7 @@ impl SceneRef<'_> {
         let folds = matches!(policy, WrongSide::Mirror | WrongSide::Flip);
         // The lowest reflection the policy leaves alone.
         let lowest = if policy == WrongSide::Bend {
-            (0.9 * ng.dot(wo)).min(0.01)
+            bend_threshold(ng, wo)
         } else {
             0.0
         };

@@ -107,7 +107,7 @@ pub fn bend_normal(ng: Vec3, i: Vec3, n: Vec3) -> Vec3 {
     let ni = n.dot(i);
     let (r, threshold) = if ni > 0.0 {
         let r = 2.0 * ni * n - i;
-        let threshold = (0.9 * ng.dot(i)).min(0.01);
+        let threshold = bend_threshold(ng, i);
         if ng.dot(r) >= threshold {
             return n;
         }
@@ -117,6 +117,12 @@ pub fn bend_normal(ng: Vec3, i: Vec3, n: Vec3) -> Vec3 {
     };
     let r = r + ng * (threshold - ng.dot(r));
     (i * r.length() + r * i.length()).normalize_or(ng)
+}
+
+/// The lowest elevation on `ng` (as a dot product) a reflection of `i` may leave at under the
+/// `bend` policy: 90 % of the incoming ray's, at most 0.01.
+pub fn bend_threshold(ng: Vec3, i: Vec3) -> f32 {
+    (0.9 * ng.dot(i)).min(0.01)
 }
 
 #[cfg(test)]

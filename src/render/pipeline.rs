@@ -425,6 +425,7 @@ impl Prepared {
                 message,
             });
         }
+        let sea_noise = film.noise_rms_sea(&camera);
         let seconds_normal_map = c.normal_map_thread_seconds() / self.threads as f64;
         let folded_fraction = self.ocean.folded_fraction();
         let ocean_notes = self
@@ -461,8 +462,8 @@ impl Prepared {
             mrays_per_s: c.rays as f64 / seconds_trace.max(1e-12) / 1e6,
             noise_rms: film.noise_rms(),
             noise_rms_relative: film.noise_rms().map(|n| n / mean_luminance(&film.image)),
-            noise_rms_sea: film.noise_rms_sea(&camera).map(|n| n.0),
-            noise_rms_sea_relative: film.noise_rms_sea(&camera).map(|n| n.1),
+            noise_rms_sea: sea_noise.map(|n| n.0),
+            noise_rms_sea_relative: sea_noise.map(|n| n.1),
             nan_count: c.nan,
             folded_fraction,
             escaped_below_horizon: c.escaped_below_horizon,

@@ -150,8 +150,7 @@ impl MapSun {
     pub(super) fn pdf(&self, d: Vec3, radiance: Vec3) -> f32 {
         let total = *self.cumulative.last().unwrap_or(&0.0);
         let cos = (1.0 - d.y * d.y).max(0.0).sqrt();
-        let texel_sr = std::f64::consts::TAU / self.w as f64 * std::f64::consts::PI / self.h as f64
-            * cos as f64;
+        let texel_sr = equirect::texel_solid_angle_at(cos as f64, self.w, self.h);
         if total == 0.0 || texel_sr == 0.0 {
             return 0.0;
         }

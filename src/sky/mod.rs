@@ -44,6 +44,13 @@ pub fn check_sun_elevation(deg: f64) -> Result<(), String> {
     }
 }
 
+/// Whether `org` (camera-relative, the sky's convention) is the camera `h` metres up, which
+/// sees the dome along its own directions.
+#[inline]
+pub(crate) fn at_camera(org: Vec3, h: f64) -> bool {
+    org == Vec3::new(0.0, h as f32, 0.0)
+}
+
 /// `c` scaled down to luminance `limit` where it is brighter, hue kept (`c` unchanged, bit for
 /// bit, below it or with an infinite limit).
 #[inline(always)]
@@ -229,7 +236,7 @@ impl Sky {
     /// Whether a ray leaves from the camera itself.
     #[inline]
     fn at_camera(&self, org: Vec3) -> bool {
-        org == Vec3::new(0.0, self.camera_height_m as f32, 0.0)
+        at_camera(org, self.camera_height_m)
     }
 
     /// Downwelling irradiance on a horizontal surface: the radiance of the upper hemisphere

@@ -22,7 +22,7 @@ use glam::Vec3;
 
 use super::analytic::Evaluator;
 use super::map_sun::MapSun;
-use super::{SUN_RADIUS_RAD, Sky, SkySource, clip, dome_offset};
+use super::{SUN_RADIUS_RAD, Sky, SkySource, at_camera, clip, dome_offset};
 
 /// How far from the sun's centre a direction may see the sun through the dome's parallax,
 /// beyond where the camera sees it: see [`SunLight::near`].
@@ -173,12 +173,6 @@ impl SunLight {
         }
     }
 
-    /// Whether `org` (camera-relative, the sky's convention) is the camera itself, which sees
-    /// the dome along its own directions.
-    fn at_camera(&self, org: Vec3, h: f64) -> bool {
-        org == Vec3::new(0.0, h as f32, 0.0)
-    }
-
     /// For a ray from `org` along unit `d` meeting the dome at `q` (from the camera): the
     /// ratio of the ray's solid angle to the camera's for the same patch of dome.
     fn dome_jacobian(org: Vec3, d: Vec3, q: Vec3, r: f64, h: f64) -> f32 {
@@ -216,7 +210,7 @@ impl SunLight {
             }
         };
         let (d, pdf) = match self.dome {
-            Some((r, h, alt)) if !self.at_camera(org, h) => {
+            Some((r, h, alt)) if !at_camera(org, h) => {
                 let camera = Vec3::new(0.0, h as f32, 0.0);
                 let q = dome_offset(r, h, alt, camera, s);
                 let d = (q - Vec3::new(org.x, org.y - h as f32, org.z)).normalize();
@@ -246,7 +240,7 @@ impl SunLight {
             return (0.0, Vec3::ZERO);
         }
         let (s, jacobian) = match self.dome {
-            Some((r, h, alt)) if !self.at_camera(org, h) => {
+            Some((r, h, alt)) if !at_camera(org, h) => {
                 let q = dome_offset(r, h, alt, org, d);
                 (q.normalize(), Self::dome_jacobian(org, d, q, r, h))
             }

@@ -267,8 +267,6 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
             },
             Extra::None,
         );
-    }
-    if full {
         add(
             "lod-paper-high",
             "tessellation",
