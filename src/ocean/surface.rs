@@ -19,7 +19,9 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use super::layer::{FIELD_COUNT, Layer, SLOPES, Slopes, Texel, add_texel, field, slopes};
+use super::layer::{
+    FIELD_COUNT, FieldPlanes, Layer, SLOPES, Slopes, Texel, add_texel, field, slopes,
+};
 use super::spectrum::Spectrum;
 use super::{Interp, MAX_LAYERS, OceanError, OceanParams};
 
@@ -35,26 +37,24 @@ pub struct Surface {
     seed: u64,
     amplitude_scale: f64,
     seconds: f64,
-    stats: Stats,
+    /// [`Surface::sampled`], computed on first use (48 ms for the default ocean: a million reads
+    /// spread over every layer's texels) and kept until the time changes.
+    sampled: OnceLock<Sampled>,
     /// [`Surface::summary`], computed on first use (62 ms for the default ocean: band integrals
     /// of the spectrum and passes over every texel) and kept until the time changes.
     summary: OnceLock<OceanSummary>,
 }
 
-/// What [`Surface::update_stats`] measures of the surface at its time.
+/// What [`Surface::sampled`] measures of the summed surface as a render reads it, on a jittered
+/// STATS_GRID^2 grid over the coarsest layer's period.
 #[derive(Clone, Debug, Default)]
-struct Stats {
+struct Sampled {
     folded_fraction: f64,
-    sampled_rms_m: f64,
-    /// Mean square slope |grad h|^2 of the summed surface as sampled (jittered grid, the
-    /// surface's interpolation).
-    sampled_mss: f64,
-    /// Per layer: over its grid points (the exact spectral gradients), and as read between
-    /// them at the jittered points.
-    grid_mss: Vec<f64>,
+    rms_m: f64,
+    /// Mean square slope |grad h|^2 of the summed surface (the surface's interpolation).
+    mss: f64,
+    /// Per layer: its mean square slope as read between the grid points.
     lookup_mss: Vec<f64>,
-    /// Per layer: the mean of h^2 over its grid points (its variance over the period).
-    grid_variance: Vec<f64>,
 }
 
 /// |grad h|^2 of a texel (or of summed fields).
@@ -260,6 +260,27 @@ impl Sampler<'_> {
     }
 }
 
+/// Every layer's fields at time `t`, one layer after another, each on every core, in one set of
+/// planes (run side by side, the two big default layers sometimes ended up on one thread in
+/// turn, rayon's stealing, 1.8x the time).
+fn compute_fields(layers: &mut [Layer], t: f64) {
+    let mut planes = FieldPlanes::default();
+    for l in layers {
+        l.compute_fields_in(t, &mut planes);
+    }
+}
+
+/// How far a read's value can exceed the largest value over the grid points, as a factor: the
+/// largest sum of the read's absolute weights (bilinear 1; Catmull-Rom 1.25 per axis, at a
+/// fraction of one half); None for the variance-preserving read, which has no such bound.
+fn read_reach(interp: Interp) -> Option<f64> {
+    match interp {
+        Interp::Bilinear => Some(1.0),
+        Interp::Bicubic => Some(1.5625),
+        Interp::VariancePreserving => None,
+    }
+}
+
 fn layer_seed(seed: u64, i: usize) -> u64 {
     seed ^ (i as u64 + 1).wrapping_mul(0xD1B5_4A32_D192_ED03)
 }
@@ -272,14 +293,12 @@ impl Surface {
         let start = Instant::now();
         let spectrum = Spectrum::new(params);
         let partition = params.partition();
-        // one layer after another, each on every core: run side by side, the two big layers
-        // sometimes ended up on one thread in turn (rayon's stealing), 1.8x the time
         let mut layers = params
             .layers
             .iter()
             .enumerate()
             .map(|(i, l)| {
-                Layer::with_weight(
+                Layer::drawn(
                     &spectrum,
                     l.size_m,
                     l.n,
@@ -291,7 +310,12 @@ impl Surface {
                 )
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let variance: f64 = layers.iter().map(Layer::height_variance).sum();
+        // the realization's variance from the amplitudes (Parseval), so the RMS scale applies
+        // to them before the transforms rather than to every texel after
+        let variance: f64 = layers
+            .iter()
+            .map(|l| l.spectral_height_variance(params.time_s))
+            .sum();
         let mut amplitude_scale = 1.0;
         if let Some(target) = params.rms_target() {
             if variance.is_nan() || variance <= 0.0 {
@@ -314,8 +338,9 @@ impl Surface {
                 ));
             }
             amplitude_scale = target / variance.sqrt();
-            layers.par_iter_mut().for_each(|l| l.scale(amplitude_scale));
+            layers.iter_mut().for_each(|l| l.scale(amplitude_scale));
         }
+        compute_fields(&mut layers, params.time_s);
         let mut surface = Surface {
             layers,
             spectrum: Some(spectrum),
@@ -323,10 +348,9 @@ impl Surface {
             seed,
             amplitude_scale,
             seconds: 0.0,
-            stats: Stats::default(),
+            sampled: OnceLock::new(),
             summary: OnceLock::new(),
         };
-        surface.update_stats();
         surface.seconds = start.elapsed().as_secs_f64();
         Ok(surface)
     }
@@ -345,7 +369,7 @@ impl Surface {
             seed: 0,
             amplitude_scale: 0.0,
             seconds: 0.0,
-            stats: Stats::default(),
+            sampled: OnceLock::new(),
             summary: OnceLock::new(),
         }
     }
@@ -355,9 +379,10 @@ impl Surface {
         if !t.is_finite() {
             return Err(OceanError::invalid("ocean.time_s", "finite", t));
         }
-        self.layers.par_iter_mut().for_each(|l| l.compute_fields(t));
+        compute_fields(&mut self.layers, t);
         self.params.time_s = t;
-        self.update_stats();
+        self.sampled = OnceLock::new();
+        self.summary = OnceLock::new();
         Ok(())
     }
 
@@ -405,86 +430,97 @@ impl Surface {
         self.spectrum.as_ref()
     }
 
-    /// Folded fraction, RMS and mean square slope of the summed surface on a jittered
-    /// STATS_GRID^2 grid over the coarsest layer's period, each layer's mean square slope as read
-    /// there and over its grid points; rows are summed in order so the result is thread-count
-    /// free.
-    /// Fraction of the summed surface with J <= 0 (a jittered grid over the coarsest period).
+    /// Fraction of the summed surface with J <= 0: exactly 0 where the layers' largest
+    /// strains prove that no read can fold ([`Surface::cannot_fold`]), else estimated on a
+    /// jittered STATS_GRID^2 grid over the coarsest period.
     pub fn folded_fraction(&self) -> f64 {
-        self.stats.folded_fraction
+        if self.cannot_fold() {
+            0.0
+        } else {
+            self.sampled().folded_fraction
+        }
+    }
+
+    /// True when J > 0 at every point a read can return: [`Surface::fold_bound`] is above a
+    /// margin that covers f32 rounding in the reads and in J.
+    pub fn cannot_fold(&self) -> bool {
+        const MARGIN: f64 = 1e-3;
+        self.layers.is_empty() || self.fold_bound().is_some_and(|j| j > MARGIN)
+    }
+
+    /// A lower bound on J = (1 + dDx/dx)(1 + dDz/dz) - (dDx/dz)^2 over every read of the summed
+    /// surface, from each layer's largest strains over its grid points. A bilinear read is a
+    /// convex blend of four texels, so no field it returns is larger than the field's largest
+    /// value over the grid points; a Catmull-Rom read's weights sum to at most 1.25^2 in
+    /// absolute value ([`read_reach`]). With A, C and B the sums over the layers of those bounds
+    /// for dDx/dx, dDz/dz and dDx/dz, J >= (1 - A)(1 - C) - B^2 wherever A, C < 1. None where
+    /// A or C reaches 1, or the read is variance-preserving (it rescales by its own blend).
+    pub fn fold_bound(&self) -> Option<f64> {
+        let reach = read_reach(self.params.interp)?;
+        let [a, c, b] = self.layers.iter().fold([0.0f64; 3], |sum, l| {
+            let m = l.grid_stats().max_strain;
+            std::array::from_fn(|i| sum[i] + reach * m[i] as f64)
+        });
+        (a < 1.0 && c < 1.0).then_some((1.0 - a) * (1.0 - c) - b * b)
     }
 
     /// RMS height of the realization: sqrt of the sum of the layers' grid variances, m (as
     /// [`OceanSummary::realization_rms_m`], without computing the summary).
     pub fn realization_rms_m(&self) -> f64 {
-        self.stats.grid_variance.iter().sum::<f64>().sqrt()
+        self.layers
+            .iter()
+            .map(Layer::height_variance)
+            .sum::<f64>()
+            .sqrt()
     }
 
-    fn update_stats(&mut self) {
-        self.summary = OnceLock::new();
-        let Some(l0) = self.layers.first() else {
-            return;
-        };
-        let size = l0.size_m();
-        let (layers, interp, m) = (&self.layers, self.params.interp, STATS_GRID);
-        // Per row: folded points, sum of h^2, of |grad h|^2, and of each layer's |grad h|^2.
-        type Row = (usize, f64, f64, [f64; MAX_LAYERS]);
-        let rows: Vec<Row> = (0..m)
-            .into_par_iter()
-            .map(|r| {
-                let mut row: Row = (0, 0.0, 0.0, [0.0; MAX_LAYERS]);
-                for c in 0..m {
-                    let h = crate::rng::splitmix64(((r * m + c) as u64) ^ self.seed);
-                    let jx = (h & 0xFFFF_FFFF) as f64 / 4_294_967_296.0;
-                    let jz = (h >> 32) as f64 / 4_294_967_296.0;
-                    let u = ((c as f64 + jx) / m as f64 * size) as f32;
-                    let v = ((r as f64 + jz) / m as f64 * size) as f32;
-                    // What `Sampler::fields` sums for the origin (0, 0), layer by layer.
-                    let mut sum = [0.0f32; FIELD_COUNT];
-                    for (i, l) in layers.iter().enumerate() {
-                        let t = l.read(u as f64 * l.inv_dx(), v as f64 * l.inv_dx(), interp);
-                        row.3[i] += slope2(&t);
-                        add_texel(&mut sum, &t);
+    /// Folded fraction, RMS and mean square slope of the summed surface, and each layer's mean
+    /// square slope as read, on a jittered STATS_GRID^2 grid over the coarsest layer's period;
+    /// rows are summed in order so the result is thread-count free.
+    fn sampled(&self) -> &Sampled {
+        self.sampled.get_or_init(|| {
+            let Some(l0) = self.layers.first() else {
+                return Sampled::default();
+            };
+            let size = l0.size_m();
+            let (layers, interp, m) = (&self.layers, self.params.interp, STATS_GRID);
+            // Per row: folded points, sum of h^2, of |grad h|^2, and of each layer's |grad h|^2.
+            type Row = (usize, f64, f64, [f64; MAX_LAYERS]);
+            let rows: Vec<Row> = (0..m)
+                .into_par_iter()
+                .map(|r| {
+                    let mut row: Row = (0, 0.0, 0.0, [0.0; MAX_LAYERS]);
+                    for c in 0..m {
+                        let h = crate::rng::splitmix64(((r * m + c) as u64) ^ self.seed);
+                        let jx = (h & 0xFFFF_FFFF) as f64 / 4_294_967_296.0;
+                        let jz = (h >> 32) as f64 / 4_294_967_296.0;
+                        let u = ((c as f64 + jx) / m as f64 * size) as f32;
+                        let v = ((r as f64 + jz) / m as f64 * size) as f32;
+                        // What `Sampler::fields` sums for the origin (0, 0), layer by layer.
+                        let mut sum = [0.0f32; FIELD_COUNT];
+                        for (i, l) in layers.iter().enumerate() {
+                            let t = l.read(u as f64 * l.inv_dx(), v as f64 * l.inv_dx(), interp);
+                            row.3[i] += slope2(&t);
+                            add_texel(&mut sum, &t);
+                        }
+                        let s = Sample::from_fields(&sum);
+                        row.0 += usize::from(s.jacobian <= 0.0);
+                        row.1 += (s.height as f64).powi(2);
+                        row.2 += slope2(&sum);
                     }
-                    let s = Sample::from_fields(&sum);
-                    row.0 += usize::from(s.jacobian <= 0.0);
-                    row.1 += (s.height as f64).powi(2);
-                    row.2 += slope2(&sum);
-                }
-                row
-            })
-            .collect();
-        // Per layer over its grid points: mean |grad h|^2 and mean h^2, in fixed chunks summed
-        // in order (the same bits on any thread count).
-        let grid: Vec<(f64, f64)> = layers
-            .iter()
-            .map(|l| {
-                let f = l.fields();
-                let chunks: Vec<(f64, f64)> = f
-                    .par_chunks(4096)
-                    .map(|c| {
-                        c.iter().fold((0.0, 0.0), |(m, v), t| {
-                            (m + slope2(t), v + (t[field::H] as f64).powi(2))
-                        })
-                    })
-                    .collect();
-                let (m, v) = chunks
-                    .iter()
-                    .fold((0.0, 0.0), |(a, b), c| (a + c.0, b + c.1));
-                (m / f.len() as f64, v / f.len() as f64)
-            })
-            .collect();
-        let total = (m * m) as f64;
-        self.stats = Stats {
-            folded_fraction: rows.iter().map(|r| r.0).sum::<usize>() as f64 / total,
-            sampled_rms_m: (rows.iter().map(|r| r.1).sum::<f64>() / total).sqrt(),
-            sampled_mss: rows.iter().map(|r| r.2).sum::<f64>() / total,
-            lookup_mss: (0..layers.len())
-                .map(|i| rows.iter().map(|r| r.3[i]).sum::<f64>() / total)
-                .collect(),
-            grid_mss: grid.iter().map(|g| g.0).collect(),
-            grid_variance: grid.iter().map(|g| g.1).collect(),
-        };
+                    row
+                })
+                .collect();
+            let total = (m * m) as f64;
+            Sampled {
+                folded_fraction: rows.iter().map(|r| r.0).sum::<usize>() as f64 / total,
+                rms_m: (rows.iter().map(|r| r.1).sum::<f64>() / total).sqrt(),
+                mss: rows.iter().map(|r| r.2).sum::<f64>() / total,
+                lookup_mss: (0..layers.len())
+                    .map(|i| rows.iter().map(|r| r.3[i]).sum::<f64>() / total)
+                    .collect(),
+            }
+        })
     }
 }
 

@@ -110,6 +110,7 @@ impl Surface {
     }
 
     fn compute_summary(&self) -> OceanSummary {
+        let sampled = self.sampled();
         let partition = self.params.partition();
         let layers: Vec<LayerSummary> = self
             .layers
@@ -132,16 +133,10 @@ impl Surface {
                     k_min,
                     k_max,
                     spectrum_rms_m: band_var.sqrt() * self.amplitude_scale,
-                    realization_rms_m: self
-                        .stats
-                        .grid_variance
-                        .get(i)
-                        .copied()
-                        .unwrap_or(0.0)
-                        .sqrt(),
+                    realization_rms_m: l.height_variance().sqrt(),
                     mss_spectrum: band(2) * self.amplitude_scale.powi(2),
-                    mss_grid: self.stats.grid_mss.get(i).copied().unwrap_or(0.0),
-                    mss_lookup: self.stats.lookup_mss.get(i).copied().unwrap_or(0.0),
+                    mss_grid: l.grid_stats().mss,
+                    mss_lookup: sampled.lookup_mss.get(i).copied().unwrap_or(0.0),
                     folded_fraction: l.folded_fraction(),
                 }
             })
@@ -159,10 +154,10 @@ impl Surface {
             model_rms_m: s.map_or(0.0, |s| s.total_variance().sqrt()),
             spectrum_rms_m: spectrum_var.sqrt(),
             realization_rms_m: realization_var.sqrt(),
-            sampled_rms_m: self.stats.sampled_rms_m,
+            sampled_rms_m: sampled.rms_m,
             mss_spectrum: layers.iter().map(|l| l.mss_spectrum).sum(),
             mss_grid: layers.iter().map(|l| l.mss_grid).sum(),
-            mss_lookup: self.stats.sampled_mss,
+            mss_lookup: sampled.mss,
             spectrum_cutoff_rad_m: layers.iter().map(|l| l.k_max).fold(0.0, f64::max),
             cox_munk_mss: s
                 .filter(|_| self.params.wind_speed > 0.0)
@@ -170,7 +165,7 @@ impl Surface {
             hs_m: 4.0 * realization_var.sqrt(),
             hs_target_m: self.params.rms_target().map(|rms| 4.0 * rms),
             amplitude_scale: self.amplitude_scale,
-            folded_fraction: self.stats.folded_fraction,
+            folded_fraction: self.folded_fraction(),
             seconds: self.seconds,
             partitions: self.partitions(&layers),
             layers,

@@ -383,6 +383,89 @@ fn folding_is_detected_and_reported() {
     assert!(folded > 0);
 }
 
+/// What the fold bound rests on: no read of a layer returns a strain larger than the layer's
+/// largest over its grid points times the read's reach (bilinear, Catmull-Rom), and the summed
+/// surface's J is never below the bound. Seas: the small test sea, and one whose choppiness
+/// makes the bound fail (so the bound is not claimed where it does not hold).
+#[test]
+fn fold_bound_holds_for_every_read() {
+    let mut worst_ratio = [0.0f64; 2];
+    for (k, interp) in [Interp::Bilinear, Interp::Bicubic].into_iter().enumerate() {
+        for chop in [1.0, 6.0] {
+            let mut s = small(3);
+            s.params.interp = interp;
+            s.layers.iter_mut().for_each(|l| l.scale(chop));
+            let reach = read_reach(interp).unwrap();
+            let sampler = s.sampler([0.0, 0.0]);
+            let bound = s.fold_bound();
+            let mut min_j = f64::INFINITY;
+            for i in 0..40_000u64 {
+                let h = crate::rng::splitmix64(i);
+                let u = (h & 0xFFFF) as f32 / 65536.0 * 200.0;
+                let v = (h >> 48) as f32 / 65536.0 * 200.0;
+                min_j = min_j.min(sampler.sample(u, v).jacobian as f64);
+                for l in s.layers() {
+                    let t = l.read(u as f64 * l.inv_dx(), v as f64 * l.inv_dx(), interp);
+                    let m = l.grid_stats().max_strain;
+                    for (j, f) in [field::DDX_DX, field::DDZ_DZ, field::DDX_DZ]
+                        .into_iter()
+                        .enumerate()
+                    {
+                        let ratio = t[f].abs() as f64 / m[j] as f64;
+                        assert!(ratio <= reach * (1.0 + 1e-5), "{interp:?}: {ratio}");
+                        worst_ratio[k] = worst_ratio[k].max(ratio);
+                    }
+                }
+            }
+            if let Some(b) = bound {
+                assert!(
+                    min_j >= b - 1e-5,
+                    "{interp:?} x{chop}: J {min_j} < bound {b}"
+                );
+            }
+            if chop == 1.0 {
+                assert!(s.cannot_fold(), "{interp:?}: bound {bound:?}");
+            } else {
+                assert!(!s.cannot_fold(), "{interp:?} x{chop}: bound {bound:?}");
+            }
+        }
+    }
+    // bicubic reads overshoot the grid's largest value, so a reach of 1 would not be a bound
+    assert!(
+        worst_ratio[0] <= 1.0 + 1e-5 && worst_ratio[1] > 1.0,
+        "{worst_ratio:?}"
+    );
+}
+
+/// What `compute_fields` measures as it writes the texels is what a pass over them finds, and
+/// the amplitudes' Parseval variance (which scales a surface to its RMS target before the
+/// transforms) is the grid's.
+#[test]
+fn grid_stats_are_the_texels_and_parseval_the_grid() {
+    let s = small(4);
+    for l in s.layers() {
+        let f = l.fields();
+        let mean = |g: &dyn Fn(&Texel) -> f64| f.iter().map(g).sum::<f64>() / f.len() as f64;
+        let g = l.grid_stats();
+        let rel = |a: f64, b: f64| (a / b - 1.0).abs();
+        assert!(rel(g.variance, mean(&|t| (t[field::H] as f64).powi(2))) < 1e-12);
+        assert!(rel(g.mss, mean(&slope2)) < 1e-12);
+        for (j, fi) in [field::DDX_DX, field::DDZ_DZ, field::DDX_DZ]
+            .into_iter()
+            .enumerate()
+        {
+            let m = f.iter().map(|t| t[fi].abs()).fold(0.0f32, f32::max);
+            assert_eq!(g.max_strain[j], m);
+        }
+        let parseval = l.spectral_height_variance(l.time_s());
+        assert!(
+            rel(parseval, g.variance) < 1e-5,
+            "{parseval} vs {}",
+            g.variance
+        );
+    }
+}
+
 #[test]
 fn layers_sum_and_set_time_moves_waves() {
     let mut s = small(8);

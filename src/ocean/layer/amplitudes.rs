@@ -102,26 +102,28 @@ fn gauss_pair(rng: &mut ChaCha8Rng) -> (f64, f64) {
 /// Words of the ChaCha8 stream one cell's [`gauss_pair`] reads (two `u64`).
 const WORDS_PER_CELL: u128 = 4;
 
-/// h0 for every cell of an `n` x `n` grid of spacing `dk` (kx-major), zero outside `band` and
-/// at DC and the Nyquist row and column, and the sum of the cell integrals (the expected height
-/// variance). Cell (ix, iz) draws its pair of normals from words `4 iz` to `4 iz + 3` of ChaCha8
-/// stream `ix` of `seed`, so the result depends neither on the thread count nor on which cells
-/// are drawn: only cells with energy seek to their words and draw (a coarse layer's band fills
-/// a fifth of its grid).
+/// h0 for the cells of an `n` x `n` grid of spacing `dk` that can hold energy, in a
+/// [`BandCells`] layout, zero outside `band` and at DC and the Nyquist row and column, and the
+/// sum of the cell integrals (the expected height variance). Cell (ix, iz) draws its pair of
+/// normals from words `4 iz` to `4 iz + 3` of ChaCha8 stream `ix` of `seed`, so the result
+/// depends neither on the thread count nor on which cells are drawn: only cells with energy seek
+/// to their words and draw (a coarse layer's band fills a fifth of its grid).
 pub(super) fn draw(
     spectrum: &PointSpectrum,
-    n: usize,
+    cells: &BandCells,
     dk: f64,
     band: (f64, f64),
     seed: u64,
 ) -> (Vec<C32>, f64) {
+    let n = cells.n;
     let half = n / 2;
     let signed = move |i: usize| signed_index(i, n);
-    let mut h0 = vec![C32::default(); n * n];
+    let mut h0: Vec<C32> = bytemuck::zeroed_vec(cells.width * cells.width);
     let row_variance: Vec<f64> = h0
-        .par_chunks_mut(n)
+        .par_chunks_mut(cells.width)
         .enumerate()
-        .map(|(ix, row)| {
+        .map(|(cx, row)| {
+            let ix = cells.grid_index(cx);
             let kx = signed(ix) * dk;
             // the Nyquist row pairs with itself; a row outside the band holds nothing
             if ix == half || kx.abs() >= band.1 {
@@ -130,7 +132,8 @@ pub(super) fn draw(
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
             rng.set_stream(ix as u64);
             let mut var = 0.0;
-            for (iz, slot) in row.iter_mut().enumerate() {
+            // in the order of the stream's words, so seeks are rare
+            for iz in cells.grid_indices() {
                 // the Nyquist column pairs with itself; DC has no direction
                 if iz == half || (ix == 0 && iz == 0) {
                     continue;
@@ -150,7 +153,7 @@ pub(super) fn draw(
                     let (g1, g2) = gauss_pair(&mut rng);
                     // E|h0|^2 = P dk^2 / 2, so the sum of E|h~(k)|^2 over k is the variance
                     let a = 0.5 * cell.sqrt();
-                    *slot = C32::new((a * g1) as f32, (a * g2) as f32);
+                    row[cells.compact_index(iz)] = C32::new((a * g1) as f32, (a * g2) as f32);
                     var += cell;
                 }
             }
@@ -158,4 +161,59 @@ pub(super) fn draw(
         })
         .collect();
     (h0, row_variance.iter().sum())
+}
+
+/// The cells of an `n` x `n` grid that a band below `k_max` can reach: signed indices
+/// -m < s < m along each axis, with m dk >= k_max, stored as a `width` x `width` square
+/// (width = 2m - 1; s >= 0 at s, s < 0 at width + s). A coarse layer's band reaches half its
+/// Nyquist, so its amplitudes take a quarter of the grid.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct BandCells {
+    pub n: usize,
+    /// m: every cell in the band has |signed index| < m along both axes.
+    reach: usize,
+    pub width: usize,
+}
+
+impl BandCells {
+    pub fn new(n: usize, dk: f64, k_max: f64) -> BandCells {
+        let reach = ((k_max / dk).ceil() as usize).clamp(1, n / 2);
+        BandCells {
+            n,
+            reach,
+            width: 2 * reach - 1,
+        }
+    }
+
+    /// The compact index of grid index `i`, which must be inside (see [`BandCells::inside`]).
+    #[inline]
+    pub fn compact_index(&self, i: usize) -> usize {
+        if i < self.reach {
+            i
+        } else {
+            i + self.width - self.n
+        }
+    }
+
+    /// Whether grid index `i` (0..n) is within the reach.
+    #[inline]
+    pub fn inside(&self, i: usize) -> bool {
+        i < self.reach || i > self.n - self.reach
+    }
+
+    /// The grid index of compact index `c`.
+    #[inline]
+    pub fn grid_index(&self, c: usize) -> usize {
+        if c < self.reach {
+            c
+        } else {
+            c + self.n - self.width
+        }
+    }
+
+    /// The grid indices within the reach, ascending.
+    pub fn grid_indices(&self) -> impl Iterator<Item = usize> + use<> {
+        let (reach, n) = (self.reach, self.n);
+        (0..reach).chain(n - reach + 1..n)
+    }
 }

@@ -6,16 +6,20 @@ use std::f64::consts::TAU;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex;
 
-use super::{C32, Layer, signed_index};
+use super::{C32, FIELD_COUNT, GridStats, Layer, signed_index};
 
 impl Layer {
     /// h~(k, t) of eq. 2 for cell `i` (kx-major) in f64.
     #[inline]
     pub(crate) fn h_tilde(&self, ix: usize, iz: usize, t: f64) -> Complex<f64> {
-        let n = self.n;
-        let i = ix * n + iz;
-        let a = self.h0[i];
-        let b = self.h0[((n - ix) & (n - 1)) * n + ((n - iz) & (n - 1))];
+        let (n, c) = (self.n, &self.cells);
+        if !c.inside(ix) || !c.inside(iz) {
+            return Complex::default();
+        }
+        let at =
+            |ix: usize, iz: usize| self.h0[c.compact_index(ix) * c.width + c.compact_index(iz)];
+        let a = at(ix, iz);
+        let b = at((n - ix) & (n - 1), (n - iz) & (n - 1));
         if a == C32::default() && b == C32::default() {
             return Complex::default();
         }
@@ -35,7 +39,39 @@ impl Layer {
         a * e + b * e.conj()
     }
 
+    /// The variance of h over the grid at time `t` from the amplitudes alone: by Parseval the
+    /// sum of |h~(k, t)|^2 over the cells (h is real), what [`Layer::height_variance`] measures
+    /// once the fields are computed, to f32 rounding.
+    pub fn spectral_height_variance(&self, t: f64) -> f64 {
+        let rows: Vec<f64> = self
+            .band_rows()
+            .into_par_iter()
+            .map(|ix| {
+                let cols = self.cells.grid_indices();
+                cols.map(|iz| self.h_tilde(ix, iz, t).norm_sqr()).sum()
+            })
+            .collect();
+        rows.iter().sum()
+    }
+
+    /// The kx rows that can hold a non-zero h~: |kx| < k_max (h0 is zero outside the band and
+    /// at Nyquist).
+    fn band_rows(&self) -> Vec<usize> {
+        let (n, dk) = (self.n, TAU / self.size_m);
+        (0..n)
+            .filter(|&ix| ix != n / 2 && signed_index(ix, n).abs() * dk < self.k_max)
+            .collect()
+    }
+
     /// Recomputes the eight fields at time `t` (eq. 2, then four packed 2-D inverse FFTs).
+    pub fn compute_fields(&mut self, t: f64) {
+        self.compute_fields_in(t, &mut FieldPlanes::default());
+    }
+
+    /// [`Layer::compute_fields`] with the transforms' intermediate planes in `planes`, which
+    /// grow to the largest layer they serve: a surface computes its layers one after another
+    /// in the same planes (a 2048-texel layer's are 67 MB, and zeroing fresh memory took a
+    /// third of its fields' time).
     ///
     /// Four planes A_j = F_{2j} + i F_{2j+1} = h~ m_j(k) hold the field pairs (h, Dx),
     /// (Dz, dh/dx), (dh/dz, dDx/dx), (dDz/dz, dDx/dz), with D~ = i lambda k/|k| h~ and
@@ -44,7 +80,7 @@ impl Layer {
     /// while it is in cache (h~ and the multipliers once per cell for all four planes). Then
     /// blocks of z columns are gathered from the rows, zero outside them, transformed along kx
     /// and written into their texels once, all eight fields together.
-    pub fn compute_fields(&mut self, t: f64) {
+    pub fn compute_fields_in(&mut self, t: f64, planes: &mut FieldPlanes) {
         let n = self.n;
         self.time_s = t;
         self.lag_correlations = std::sync::OnceLock::new();
@@ -52,15 +88,21 @@ impl Layer {
         let signed = move |i: usize| signed_index(i, n);
         let lam = self.choppiness;
         let scratch_len = self.fft.get_inplace_scratch_len();
-        // |kx| < k_max holds every non-zero h~ (h0 is zero outside the band and at Nyquist)
-        let rows: Vec<usize> = (0..n)
-            .filter(|&ix| ix != n / 2 && signed(ix).abs() * dk < self.k_max)
-            .collect();
-        let mut planes: [Vec<C32>; 4] =
-            std::array::from_fn(|_| vec![C32::default(); rows.len() * n]);
+        if self.fields.len() != n * n {
+            self.fields = vec![[0.0; FIELD_COUNT]; n * n];
+        }
+        let rows = self.band_rows();
+        for p in &mut planes.0 {
+            // fresh zero pages (calloc), first touched by the row pass on every core: zeroing
+            // them here on one thread cost a 2048-texel layer a fifth of its time
+            if p.len() < rows.len() * n {
+                *p = bytemuck::zeroed_vec(rows.len() * n);
+            }
+            p.truncate(rows.len() * n);
+        }
         {
             let this = &*self;
-            let [p0, p1, p2, p3] = &mut planes;
+            let [p0, p1, p2, p3] = &mut planes.0;
             p0.par_chunks_mut(n)
                 .zip(p1.par_chunks_mut(n))
                 .zip(p2.par_chunks_mut(n))
@@ -70,10 +112,13 @@ impl Layer {
                     || vec![C32::default(); scratch_len],
                     |scratch, ((((r0, r1), r2), r3), &ix)| {
                         let kx = signed(ix) * dk;
-                        let rows = [r0, r1, r2, r3];
+                        let mut rows = [r0, r1, r2, r3];
+                        for row in rows.iter_mut() {
+                            row.fill(C32::default());
+                        }
                         let mut any = false;
-                        #[allow(clippy::needless_range_loop)] // iz indexes four rows at once
-                        for iz in 0..n {
+                        // the cells outside the band's reach are zero
+                        for iz in this.cells.grid_indices() {
                             let h = this.h_tilde(ix, iz, t);
                             if h == Complex::default() {
                                 continue;
@@ -94,14 +139,15 @@ impl Layer {
                 );
         }
         // Blocks of COLUMNS z rows: gathered over kx (runs of COLUMNS values per stored row),
-        // transformed along kx, and each texel written once.
+        // transformed along kx, and each texel written once, measured as it is written.
         const COLUMNS: usize = 16;
         let fft = &self.fft;
-        let (planes, rows) = (&planes, &rows);
-        self.fields
+        let (planes, rows) = (&planes.0, &rows);
+        let blocks: Vec<GridStats> = self
+            .fields
             .par_chunks_mut(n * COLUMNS)
             .enumerate()
-            .for_each_init(
+            .map_init(
                 || {
                     let buf: [Vec<C32>; 4] =
                         std::array::from_fn(|_| vec![C32::default(); COLUMNS * n]);
@@ -121,6 +167,7 @@ impl Layer {
                         }
                         fft.process_with_scratch(b, scratch);
                     }
+                    let mut stats = GridStats::default();
                     for (dz, texels) in out.chunks_mut(n).enumerate() {
                         for (x, texel) in texels.iter_mut().enumerate() {
                             for j in 0..4 {
@@ -128,10 +175,17 @@ impl Layer {
                                 texel[2 * j] = v.re;
                                 texel[2 * j + 1] = v.im;
                             }
+                            stats.add(texel);
                         }
                     }
+                    stats
                 },
-            );
+            )
+            .collect();
+        let mut grid = blocks.iter().fold(GridStats::default(), |a, b| a.merge(b));
+        grid.variance /= (n * n) as f64;
+        grid.mss /= (n * n) as f64;
+        self.grid = grid;
     }
 
     #[cfg(test)]
@@ -163,6 +217,10 @@ impl Layer {
         b
     }
 }
+
+/// The four intermediate planes of [`Layer::compute_fields_in`], kept between layers.
+#[derive(Default)]
+pub struct FieldPlanes([Vec<C32>; 4]);
 
 /// The spectral multipliers m_j(k) of [`Layer::compute_fields`]'s four planes.
 #[inline]

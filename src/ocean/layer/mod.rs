@@ -43,6 +43,8 @@ mod amplitudes;
 mod fields;
 mod read;
 
+pub use fields::FieldPlanes;
+
 #[cfg(test)]
 use read::{LANE_RANGE, split, split_lanes};
 pub(crate) use read::{LagCorrelations, add_texel};
@@ -80,6 +82,41 @@ pub fn slopes(t: &Texel) -> Slopes {
 
 type C32 = Complex<f32>;
 
+/// What [`Layer::compute_fields`] measures of the grid points as it writes them: the sums
+/// while it runs, the means once it is done.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GridStats {
+    /// Mean of h^2 (the layer's variance over its period), m^2.
+    pub variance: f64,
+    /// Mean of |grad h|^2 (the exact spectral gradients).
+    pub mss: f64,
+    /// The largest |dDx/dx|, |dDz/dz| and |dDx/dz|: a bound on what any bilinear read returns.
+    pub max_strain: [f32; 3],
+}
+
+impl GridStats {
+    #[inline]
+    fn add(&mut self, t: &Texel) {
+        self.variance += (t[field::H] as f64).powi(2);
+        self.mss += (t[field::DH_DX] as f64).powi(2) + (t[field::DH_DZ] as f64).powi(2);
+        for (m, f) in self
+            .max_strain
+            .iter_mut()
+            .zip([field::DDX_DX, field::DDZ_DZ, field::DDX_DZ])
+        {
+            *m = m.max(t[f].abs());
+        }
+    }
+
+    fn merge(&self, o: &GridStats) -> GridStats {
+        GridStats {
+            variance: self.variance + o.variance,
+            mss: self.mss + o.mss,
+            max_strain: std::array::from_fn(|i| self.max_strain[i].max(o.max_strain[i])),
+        }
+    }
+}
+
 /// One periodic realization: amplitudes, dispersion and the gridded fields at one time.
 pub struct Layer {
     size_m: f64,
@@ -88,14 +125,18 @@ pub struct Layer {
     k_max: f64,
     choppiness: f64,
     time_s: f64,
-    /// h0(k), kx-major (index ix * n + iz), zero outside the band.
+    /// h0(k) of the cells the band can reach, kx-major in `cells`' layout, zero outside the
+    /// band.
     h0: Vec<C32>,
+    cells: amplitudes::BandCells,
     /// Water depth for the dispersion relation: omega(|k|) is computed where h0 is non-zero
     /// rather than stored (64 MB for a 2048-texel layer).
     depth_m: f64,
     expected_variance: f64,
     /// Texels, z-major (index iz * n + ix); texel (ix, iz) is at (ix L/n, iz L/n).
     fields: Vec<Texel>,
+    /// The fields' grid statistics, measured as they were written.
+    grid: GridStats,
     /// Each field's correlations between neighbouring texels, for variance-preserving reads:
     /// computed on first use, forgotten when the fields change.
     lag_correlations: std::sync::OnceLock<LagCorrelations>,
@@ -143,6 +184,24 @@ impl Layer {
     /// amplitudes, whatever the thread count.
     #[allow(clippy::too_many_arguments)]
     pub fn with_weight(
+        spectrum: &Spectrum,
+        size_m: f64,
+        n: usize,
+        band: (f64, f64),
+        weight: &(dyn Fn(f64) -> f64 + Sync),
+        choppiness: f64,
+        seed: u64,
+        time_s: f64,
+    ) -> Result<Layer, OceanError> {
+        let mut layer = Layer::drawn(spectrum, size_m, n, band, weight, choppiness, seed, time_s)?;
+        layer.compute_fields(time_s);
+        Ok(layer)
+    }
+
+    /// The layer of [`Layer::with_weight`] with its amplitudes drawn and its fields not yet
+    /// computed: [`Layer::compute_fields`] (or `_in`) must run before anything reads it.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn drawn(
         spectrum: &Spectrum,
         size_m: f64,
         n: usize,
@@ -205,9 +264,10 @@ impl Layer {
         time_s: f64,
     ) -> Layer {
         let dk = TAU / size_m;
-        let (h0, expected_variance) = amplitudes::draw(point, n, dk, band, splitmix64(seed));
+        let cells = amplitudes::BandCells::new(n, dk, band.1);
+        let (h0, expected_variance) = amplitudes::draw(point, &cells, dk, band, splitmix64(seed));
         let fft = FftPlanner::<f32>::new().plan_fft_inverse(n);
-        let mut layer = Layer {
+        Layer {
             size_m,
             n,
             k_min: band.0,
@@ -215,15 +275,15 @@ impl Layer {
             choppiness,
             time_s,
             h0,
+            cells,
             depth_m,
             expected_variance,
-            fields: vec![[0.0; FIELD_COUNT]; n * n],
+            fields: Vec::new(),
+            grid: GridStats::default(),
             lag_correlations: std::sync::OnceLock::new(),
             fft,
             inv_dx: n as f64 / size_m,
-        };
-        layer.compute_fields(time_s);
-        layer
+        }
     }
 
     pub fn size_m(&self) -> f64 {
@@ -261,12 +321,23 @@ impl Layer {
 
     /// Mean of h^2 over the grid (= the variance over the period, by Parseval), m^2.
     pub fn height_variance(&self) -> f64 {
-        let s: f64 = self
-            .fields
-            .iter()
-            .map(|t| (t[field::H] as f64).powi(2))
-            .sum();
-        s / self.fields.len() as f64
+        self.grid.variance
+    }
+
+    /// h0 of grid cell (ix, iz), zero outside the band's reach.
+    #[cfg(test)]
+    pub(crate) fn h0_at(&self, ix: usize, iz: usize) -> C32 {
+        let c = &self.cells;
+        if c.inside(ix) && c.inside(iz) {
+            self.h0[c.compact_index(ix) * c.width + c.compact_index(iz)]
+        } else {
+            C32::default()
+        }
+    }
+
+    /// Means and bounds over the grid points (see [`GridStats`]).
+    pub fn grid_stats(&self) -> &GridStats {
+        &self.grid
     }
 
     /// Fraction of grid points where this layer alone folds (J <= 0).
@@ -283,6 +354,9 @@ impl Layer {
             .par_iter_mut()
             .for_each(|t| t.iter_mut().for_each(|v| *v *= sf));
         self.expected_variance *= s * s;
+        let g = &mut self.grid;
+        (g.variance, g.mss) = (g.variance * s * s, g.mss * s * s);
+        g.max_strain = g.max_strain.map(|m| m * sf.abs());
     }
 }
 

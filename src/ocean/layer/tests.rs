@@ -407,8 +407,9 @@ fn a_cells_amplitude_does_not_depend_on_the_band() {
     let narrow = layer((6.0 * dk, 12.0 * dk));
     let wide = layer((2.0 * dk, 30.0 * dk));
     let mut shared = 0;
-    for (i, (a, b)) in narrow.h0.iter().zip(wide.h0.iter()).enumerate() {
+    for i in 0..n * n {
         let (ix, iz) = (i / n, i % n);
+        let (a, b) = (&narrow.h0_at(ix, iz), &wide.h0_at(ix, iz));
         let k = signed_index(ix, n).hypot(signed_index(iz, n)) * dk;
         if (6.0 * dk..12.0 * dk).contains(&k) {
             assert_eq!(a, b, "cell ({ix}, {iz})");
@@ -422,6 +423,56 @@ fn a_cells_amplitude_does_not_depend_on_the_band() {
         }
     }
     assert!(shared > 300, "{shared} shared cells with energy");
+}
+
+/// Planes shared between layers leave nothing behind: a narrow-band layer computed in the planes
+/// a wider, finer one used gets the fields it gets in planes of its own, bit for bit.
+#[test]
+fn shared_planes_give_the_fields_of_fresh_ones() {
+    let p = OceanParams::default();
+    let (size, n) = (47.3, 64);
+    let dk = TAU / size;
+    let wide = || Layer::new(&spectrum(&p), size, 2 * n, (dk, 60.0 * dk), 1.0, 3, 0.0).unwrap();
+    let mut narrow = Layer::new(&spectrum(&p), size, n, (2.0 * dk, 9.0 * dk), 1.0, 4, 0.0).unwrap();
+    let fresh = narrow.fields().to_vec();
+    let mut planes = super::FieldPlanes::default();
+    wide().compute_fields_in(0.5, &mut planes);
+    narrow.compute_fields_in(0.0, &mut planes);
+    assert_eq!(narrow.fields(), &fresh[..]);
+}
+
+/// The compact layout of the amplitudes: every grid index within the reach maps to a distinct
+/// slot and back, the reach is closed under the mirror i -> -i, and it holds every cell of the
+/// band (a band to the Nyquist keeps all but the Nyquist index).
+#[test]
+fn band_cells_cover_the_band_once() {
+    use super::amplitudes::BandCells;
+    for (n, reach_k) in [
+        (64usize, 9.5),
+        (64, 10.0),
+        (64, 32.0),
+        (256, 1.0),
+        (16, 0.5),
+    ] {
+        let cells = BandCells::new(n, 1.0, reach_k);
+        let inside: Vec<usize> = (0..n).filter(|&i| cells.inside(i)).collect();
+        assert_eq!(inside, cells.grid_indices().collect::<Vec<_>>());
+        assert_eq!(inside.len(), cells.width, "n {n}, k_max {reach_k}");
+        let mut seen = vec![false; cells.width];
+        for &i in &inside {
+            let c = cells.compact_index(i);
+            assert!(!seen[c], "slot {c} twice");
+            seen[c] = true;
+            assert_eq!(cells.grid_index(c), i);
+            assert!(cells.inside((n - i) % n), "mirror of {i}");
+        }
+        for i in 0..n {
+            let s = signed_index(i, n);
+            if i != n / 2 && s.abs() < reach_k {
+                assert!(cells.inside(i), "index {i} (signed {s}) of k_max {reach_k}");
+            }
+        }
+    }
 }
 
 /// The radial table that draws the amplitudes against the spectrum's own formulas: the same
@@ -471,7 +522,11 @@ fn table_matches_exact_spectrum() {
             spectrum: &spectrum,
             weight: &weight,
         };
-        let build = |point| Layer::build(point, p.depth_m, size_m, n, band, 1.0, 7, 2.5);
+        let build = |point| {
+            let mut layer = Layer::build(point, p.depth_m, size_m, n, band, 1.0, 7, 2.5);
+            layer.compute_fields(2.5);
+            layer
+        };
         let (fast, slow) = (build(&table), build(&exact));
         let rel = |a: &mut dyn Iterator<Item = (f64, f64)>| {
             let (d, r) = a.fold((0.0, 0.0), |(d, r), (x, y)| {
