@@ -413,6 +413,14 @@ pub fn auto_exposure(img: &RgbImage) -> f32 {
     0.18 / *median
 }
 
+/// The exposure factor a PNG preview of `img` uses for `render.exposure` (stops, or `None` for
+/// [`auto_exposure`]), and the same in stops (what a report shows, and what a user can pass
+/// back as `--exposure` to keep it).
+pub fn png_exposure(stops: Option<f32>, img: &RgbImage) -> (f32, f32) {
+    let factor = stops.map_or_else(|| auto_exposure(img), f32::exp2);
+    (factor, factor.log2())
+}
+
 /// Writes an 8-bit sRGB PNG preview of a linear image.
 pub fn write_png(path: &Path, img: &RgbImage, exposure: f32) -> Result<(), ImageError> {
     Ok(stage_png(path, img, exposure)?.commit()?)

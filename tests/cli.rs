@@ -524,3 +524,52 @@ fn every_flag_of_every_command_has_help_text() {
         }
     }
 }
+
+/// `--exposure` sets the PNG's exposure in stops and leaves the EXR alone; the sidecar says what
+/// the PNG used (also what `auto` chose); a value that is neither is refused naming the flag.
+#[test]
+fn exposure_scales_the_png_only() {
+    let dir = tmp("exposure");
+    let mean_png = |p: &Path| {
+        let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(p).unwrap()));
+        let mut reader = decoder.read_info().unwrap();
+        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        let b = &buf[..info.buffer_size()];
+        b.iter().map(|&v| v as f64).sum::<f64>() / b.len() as f64
+    };
+    let mut means = Vec::new();
+    for e in ["-2", "3", "auto"] {
+        let out = dir.join(format!("e{e}"));
+        let o = out.to_str().unwrap();
+        let args = ["render", "--width", "64", "--spp", "1", "--backend", "rust"];
+        let (code, json, err) =
+            vastocean(&[&args[..], &["--exposure", e, "--out", o, "--json"]].concat());
+        assert_eq!(code, 0, "{err}");
+        let json: serde_json::Value = serde_json::from_str(&json).unwrap();
+        let stops = json["png_exposure_stops"].as_f64().unwrap();
+        let exr = vastocean::image_io::read_exr(&out.with_extension("exr")).unwrap();
+        if e == "auto" {
+            let auto = vastocean::image_io::auto_exposure(&exr).log2() as f64;
+            assert!((stops - auto).abs() < 1e-6, "{stops} vs {auto}");
+        } else {
+            assert_eq!(stops, e.parse::<f64>().unwrap());
+        }
+        means.push((mean_png(&out.with_extension("png")), exr.pixels.clone()));
+    }
+    assert!(means[0].0 < means[1].0, "{} vs {}", means[0].0, means[1].0);
+    assert_eq!(
+        means[0].1, means[1].1,
+        "the EXR does not depend on the exposure"
+    );
+    let (code, _, err) = vastocean(&[
+        "render",
+        "--exposure",
+        "bright",
+        "--out",
+        dir.join("x").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--exposure") && err.contains("stops"), "{err}");
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -121,6 +121,12 @@ fn a_sequence_writes_numbered_frames_and_one_json() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("seq.json")).unwrap()).unwrap();
     assert_eq!(json["frames"].as_array().unwrap().len(), 3);
     assert_eq!(json["frames_planned"], 3);
+    // one exposure for the sequence: what `auto` chose for the first frame
+    let first = vastocean::image_io::read_exr(&r.frames[0].exr).unwrap();
+    let auto = vastocean::image_io::auto_exposure(&first).log2();
+    assert_eq!(r.png_exposure_stops, Some(auto));
+    let last = vastocean::image_io::read_exr(&r.frames[2].exr).unwrap();
+    assert_ne!(vastocean::image_io::auto_exposure(&last).log2(), auto);
     assert!(r.stale_frames.is_empty());
     // A shorter sequence over the same prefix names the longer one's leftover frame.
     let r = run(&FramesJob {

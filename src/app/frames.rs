@@ -14,7 +14,7 @@ use serde::Serialize;
 
 use super::{AppError, check_outputs, with_extension};
 use crate::config::SceneConfig;
-use crate::image_io::{auto_exposure, commit_all, stage_exr_with, stage_json, stage_png};
+use crate::image_io::{commit_all, png_exposure, stage_exr_with, stage_json, stage_png};
 use crate::render::pipeline::{FrameUpdate, Setup, mean_luminance, prepare_with};
 
 /// Most frames one sequence may have (four digits in the file names).
@@ -126,6 +126,9 @@ pub struct SequenceReport {
     pub median_seconds_update: Option<f64>,
     pub rebuild_over_update: Option<f64>,
     pub seconds_total: f64,
+    /// The PNGs' exposure, stops: `render.exposure`, or what `auto` chose for the first frame
+    /// (one exposure for the sequence, so the frames do not flicker).
+    pub png_exposure_stops: Option<f32>,
     pub json: PathBuf,
     /// The sea state's range notes (see `crate::ocean::Spectrum::range_notes`).
     pub ocean_notes: Vec<String>,
@@ -225,6 +228,7 @@ pub fn run(job: &FramesJob) -> Result<SequenceReport, AppError> {
         median_seconds_update: None,
         rebuild_over_update: None,
         seconds_total: 0.0,
+        png_exposure_stops: cfg.render.exposure,
         json: json.clone(),
         ocean_notes: Vec::new(),
         stale_frames: stale_frames(&job.out, times.len()),
@@ -247,9 +251,11 @@ pub fn run(job: &FramesJob) -> Result<SequenceReport, AppError> {
             frame_path(&job.out, index, "png"),
         );
         let image = &r.film.image;
+        let (exposure, stops) = png_exposure(report.png_exposure_stops, image);
+        report.png_exposure_stops = Some(stops);
         let staged = vec![
             stage_exr_with(&exr, image, &[("Y.variance", &r.film.var_y)])?,
-            stage_png(&png, image, auto_exposure(image))?,
+            stage_png(&png, image, exposure)?,
         ];
         commit_all(staged)?;
         report.width = r.report.width;

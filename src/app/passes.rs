@@ -14,7 +14,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use super::{AppError, check_outputs, with_extension};
-use crate::image_io::{auto_exposure, commit_all, stage, stage_exr_with, stage_json, stage_png};
+use crate::image_io::{commit_all, png_exposure, stage, stage_exr_with, stage_json, stage_png};
 use crate::render::film::{Film, PixelState};
 use crate::render::pipeline::{PassInfo, RenderReport, mean_luminance, warnings};
 
@@ -277,9 +277,11 @@ pub fn merge(job: &MergeJob) -> Result<RenderReport, AppError> {
     r.json = json.clone();
     r.pass_file = None;
     let image = &film.image;
+    let (exposure, stops) = png_exposure(r.config.render.exposure, image);
+    r.png_exposure_stops = Some(stops);
     let staged = vec![
         stage_exr_with(&exr, image, &[("Y.variance", &film.var_y)])?,
-        stage_png(&png, image, auto_exposure(image))?,
+        stage_png(&png, image, exposure)?,
         stage_json(&json, &r)?,
     ];
     commit_all(staged)?;

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use super::{AppError, check_outputs, with_extension};
 use crate::config::SceneConfig;
-use crate::image_io::{auto_exposure, commit_all, stage_exr_with, stage_json, stage_png};
+use crate::image_io::{commit_all, png_exposure, stage_exr_with, stage_json, stage_png};
 use crate::render::film::Samples;
 use crate::render::pipeline::{PassInfo, RenderReport, Setup, prepare_with, render_scene};
 
@@ -42,7 +42,9 @@ pub fn run(job: &RenderJob) -> Result<RenderReport, AppError> {
     let mut r = render_scene(&job.scene, job.progress)?;
     let image = &r.film.image;
     let staged_exr = stage_exr_with(&exr, image, &[("Y.variance", &r.film.var_y)])?;
-    let staged_png = stage_png(&png, image, auto_exposure(image))?;
+    let (exposure, stops) = png_exposure(job.scene.render.exposure, image);
+    r.report.png_exposure_stops = Some(stops);
+    let staged_png = stage_png(&png, image, exposure)?;
     r.report.exr = exr;
     r.report.png = png;
     r.report.json = json.clone();

@@ -184,6 +184,15 @@ fn parse_band(s: &str) -> Result<(f64, f64), String> {
     Ok((num(a)?, num(b)?))
 }
 
+/// `--exposure`'s value: stops, or `None` for auto (a type of its own: clap reads a bare
+/// `Option<Option<_>>` as a flag whose value may be left out).
+#[derive(Clone, Copy, Debug)]
+struct Exposure(Option<f32>);
+
+fn parse_exposure(s: &str) -> Result<Exposure, String> {
+    vastocean::config::render::parse_exposure(s).map(Exposure)
+}
+
 #[derive(clap::Args)]
 #[command(allow_negative_numbers = true)]
 pub struct RenderArgs {
@@ -209,6 +218,11 @@ pub struct RenderArgs {
     /// Render only the elevations TOP:BOTTOM in degrees, e.g. +1:-6 (equirectangular camera).
     #[arg(long, value_parser = parse_band, allow_hyphen_values = true)]
     band: Option<(f64, f64)>,
+    /// The PNG preview's exposure: `auto` (each image's median luminance to mid grey; an
+    /// animation keeps its first frame's) or stops, radiance x 2^STOPS before the tone curve.
+    /// The sidecar reports what was used as `png_exposure_stops`. The EXR is never scaled.
+    #[arg(long, value_parser = parse_exposure, allow_hyphen_values = true)]
+    exposure: Option<Exposure>,
     /// Output prefix: writes PREFIX.exr, PREFIX.png and PREFIX.json.
     #[arg(long, default_value = "out/render")]
     out: PathBuf,
@@ -277,6 +291,9 @@ impl RenderArgs {
         cfg.render.normals = self.normals.unwrap_or(cfg.render.normals);
         cfg.render.filter_width = self.filter_width.unwrap_or(cfg.render.filter_width);
         cfg.render.filter_lobe = self.filter_lobe.unwrap_or(cfg.render.filter_lobe);
+        if let Some(Exposure(e)) = self.exposure {
+            cfg.render.exposure = e;
+        }
         if let Some(b) = self.band {
             let Projection::Equirect { .. } = cfg.camera.projection else {
                 return Err(

@@ -276,6 +276,15 @@ impl SceneConfig {
                 r.filter_width,
             ));
         }
+        if let Some(e) = r.exposure
+            && !(e.is_finite() && e.abs() <= render::MAX_EXPOSURE_STOPS)
+        {
+            return Err(invalid(
+                "render.exposure",
+                &format!("\"auto\" or stops within +-{}", render::MAX_EXPOSURE_STOPS),
+                e,
+            ));
+        }
         if !(1..=64).contains(&r.max_segments) {
             return Err(invalid("render.max_segments", "in 1..=64", r.max_segments));
         }
@@ -459,6 +468,27 @@ mod tests {
         assert_eq!(c.sky.dome_altitude_m, Some(5e4));
         let c: SceneConfig = toml::from_str("[sky]\ndome_altitude_m = -inf\n").unwrap();
         assert!(c.validate().is_err());
+        // The PNG's exposure: "auto" (the default) or stops, integer or not, in TOML and JSON.
+        assert!(
+            toml::to_string(&SceneConfig::default())
+                .unwrap()
+                .contains("exposure = \"auto\"")
+        );
+        for (text, stops) in [("2", Some(2.0)), ("-1.5", Some(-1.5)), ("\"auto\"", None)] {
+            let c: SceneConfig = toml::from_str(&format!("[render]\nexposure = {text}\n")).unwrap();
+            assert_eq!(c.render.exposure, stops);
+            let json = serde_json::to_string(&c).unwrap();
+            assert_eq!(serde_json::from_str::<SceneConfig>(&json).unwrap(), c);
+        }
+        let e = toml::from_str::<SceneConfig>("[render]\nexposure = \"bright\"\n").unwrap_err();
+        assert!(e.to_string().contains("stops"), "{e}");
+        let c: SceneConfig = toml::from_str("[render]\nexposure = 65\n").unwrap();
+        assert!(
+            c.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("render.exposure")
+        );
     }
 
     #[test]

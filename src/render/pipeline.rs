@@ -458,6 +458,7 @@ impl Prepared {
                 + self.seconds_tessellation
                 + seconds_build
                 + seconds_trace,
+            png_exposure_stops: None,
             rays: c.rays,
             mrays_per_s: c.rays as f64 / seconds_trace.max(1e-12) / 1e6,
             noise_rms: film.noise_rms(),

@@ -50,6 +50,10 @@ pub struct RenderReport {
     pub normal_map_share: f64,
     /// Sum of the phases above (ocean, tessellation, BVH build, trace).
     pub seconds_total: f64,
+    /// The PNG preview's exposure, stops (`render.exposure`, or what `auto` chose); absent
+    /// where no PNG was written (a pass file).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub png_exposure_stops: Option<f32>,
     pub rays: u64,
     pub mrays_per_s: f64,
     /// RMS over the image of the standard error of the pixel luminance (from each pixel's

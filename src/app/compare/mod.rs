@@ -16,7 +16,7 @@ use crate::analysis::error::{
 };
 use crate::analysis::plot;
 use crate::config::{LodConfig, NormalMode, Projection, SceneConfig};
-use crate::image_io::{auto_exposure, write_exr_with, write_json, write_png};
+use crate::image_io::{png_exposure, write_exr_with, write_json, write_png};
 use crate::render::film::{MAX_BATCHES, Samples};
 use crate::render::pipeline::{Prepared, Rendered, Setup, prepare_with};
 
@@ -375,7 +375,7 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
     let (top, bottom) = job.rows_deg;
 
     // One exposure for all, so the sheet compares like with like.
-    let exposure = auto_exposure(&runs[0].1.film.image);
+    let (exposure, _) = png_exposure(job.scene.render.exposure, &runs[0].1.film.image);
     for (info, r) in &runs {
         let channels = film_channels(&r.film);
         let extra: Vec<(&str, &[f32])> = channels
