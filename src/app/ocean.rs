@@ -8,7 +8,6 @@ use serde::Serialize;
 
 use super::AppError;
 use crate::ocean::repeat::{RepeatCorrelation, profile_csv, repeat_correlation};
-use crate::ocean::slopes::SurfaceSlopes;
 use crate::ocean::{OceanParams, OceanSummary, Surface, write_preview_png};
 
 /// An ocean job.
@@ -50,7 +49,7 @@ impl FootprintSlopes {
     /// The split a filtered render makes for a footprint `width_m` wide, with the default
     /// filter width.
     pub fn new(surface: &Surface, width_m: f64) -> FootprintSlopes {
-        let slopes = SurfaceSlopes::new(surface);
+        let slopes = surface.slopes();
         let sigma_m = width_m * crate::config::render::FILTER_WIDTH_BOX as f64;
         let split = slopes.split(sigma_m as f32);
         let layers: Vec<LayerSplit> = slopes

@@ -79,13 +79,15 @@ impl Layer {
         let bins = (octaves * BINS_PER_OCTAVE as f64).ceil() as usize + 1;
         let ln_k0 = k0.ln();
         let t = self.time_s();
-        let per_bin = (0..n)
+        // the cells outside the band's reach are zero
+        let rows: Vec<usize> = self.band_indices().collect();
+        let per_bin = rows
             .into_par_iter()
             .fold(
                 || vec![[0.0f64; 3]; bins],
                 |mut acc, ix| {
                     let kx = signed_index(ix, n) * dk;
-                    for iz in 0..n {
+                    for iz in self.band_indices() {
                         let h = self.h_tilde(ix, iz, t);
                         let p = h.norm_sqr();
                         if p == 0.0 {

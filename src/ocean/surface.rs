@@ -22,6 +22,7 @@ use rayon::prelude::*;
 use super::layer::{
     FIELD_COUNT, FieldPlanes, Layer, SLOPES, Slopes, Texel, add_texel, field, slopes,
 };
+use super::slopes::SurfaceSlopes;
 use super::spectrum::Spectrum;
 use super::{Interp, MAX_LAYERS, OceanError, OceanParams};
 
@@ -40,6 +41,9 @@ pub struct Surface {
     /// [`Surface::sampled`], computed on first use (48 ms for the default ocean: a million reads
     /// spread over every layer's texels) and kept until the time changes.
     sampled: OnceLock<Sampled>,
+    /// [`Surface::slopes`], computed on first use (35 ms for the default ocean: a pass over
+    /// every layer's amplitudes) and kept until the time changes.
+    slopes: OnceLock<SurfaceSlopes>,
     /// [`Surface::summary`], computed on first use (62 ms for the default ocean: band integrals
     /// of the spectrum and passes over every texel) and kept until the time changes.
     summary: OnceLock<OceanSummary>,
@@ -349,6 +353,7 @@ impl Surface {
             amplitude_scale,
             seconds: 0.0,
             sampled: OnceLock::new(),
+            slopes: OnceLock::new(),
             summary: OnceLock::new(),
         };
         surface.seconds = start.elapsed().as_secs_f64();
@@ -370,6 +375,7 @@ impl Surface {
             amplitude_scale: 0.0,
             seconds: 0.0,
             sampled: OnceLock::new(),
+            slopes: OnceLock::new(),
             summary: OnceLock::new(),
         }
     }
@@ -382,6 +388,7 @@ impl Surface {
         compute_fields(&mut self.layers, t);
         self.params.time_s = t;
         self.sampled = OnceLock::new();
+        self.slopes = OnceLock::new();
         self.summary = OnceLock::new();
         Ok(())
     }
@@ -446,6 +453,12 @@ impl Surface {
     pub fn cannot_fold(&self) -> bool {
         const MARGIN: f64 = 1e-3;
         self.layers.is_empty() || self.fold_bound().is_some_and(|j| j > MARGIN)
+    }
+
+    /// The slope covariance by band of every layer at the surface's time, what filtered normals
+    /// split at each hit ([`SurfaceSlopes`]), computed once and shared by every render of it.
+    pub fn slopes(&self) -> &SurfaceSlopes {
+        self.slopes.get_or_init(|| SurfaceSlopes::new(self))
     }
 
     /// A lower bound on J = (1 + dDx/dx)(1 + dDz/dz) - (dDx/dz)^2 over every read of the summed

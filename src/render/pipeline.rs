@@ -22,7 +22,6 @@ use crate::accel::{Accel, tracing_pool};
 use crate::config::{Backend, SceneConfig};
 use crate::lod::{EARTH_RADIUS_M, LodParams, LodStats, tessellate};
 use crate::ocean::Surface;
-use crate::ocean::slopes::SurfaceSlopes;
 use crate::sky::Sky;
 
 /// The height of the sea surface right under the camera, m: the point whose displaced position
@@ -388,9 +387,9 @@ impl Prepared {
         let camera = Camera::new(cfg.camera.projection, cfg.camera.width, cfg.camera.aspect);
         let sampler = self.ocean.sampler(self.camera_position_m);
         let filtered = cfg.render.normals == crate::config::NormalMode::Filtered;
-        let slopes = filtered.then(|| self.pool.install(|| SurfaceSlopes::new(&self.ocean)));
+        let slopes = filtered.then(|| self.pool.install(|| self.ocean.slopes()));
         let scene_ref = SceneRef {
-            slopes: slopes.as_ref(),
+            slopes,
             sun: if filtered { self.sky.sun_light() } else { None },
             accel: self.accel.as_ref(),
             skip_slope: self.skip_slope,

@@ -335,6 +335,12 @@ impl Layer {
         }
     }
 
+    /// The grid indices (along either axis) of the cells the band can reach, ascending: h0 and
+    /// h~ are zero at every cell with an index outside them.
+    pub(crate) fn band_indices(&self) -> impl Iterator<Item = usize> + use<> {
+        self.cells.grid_indices()
+    }
+
     /// Means and bounds over the grid points (see [`GridStats`]).
     pub fn grid_stats(&self) -> &GridStats {
         &self.grid
