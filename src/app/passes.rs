@@ -150,7 +150,8 @@ pub struct MergeJob {
     pub out: PathBuf,
 }
 
-/// Checks that passes belong to one render: the same scene (whatever threads each used), the
+/// Checks that passes belong to one render: the same scene (whatever threads and exposure each
+/// used), the
 /// same image, seed, samples and number of passes, and no pass twice.
 fn check_same_render(passes: &[Pass]) -> Result<(), AppError> {
     let first = &passes[0];
@@ -158,6 +159,8 @@ fn check_same_render(passes: &[Pass]) -> Result<(), AppError> {
     let key = |p: &Pass| {
         let mut c = p.report.config.clone();
         c.render.threads = 0;
+        // the PNG's exposure is merge's own (the passes write no PNG)
+        c.render.exposure = None;
         c
     };
     let mut seen: Vec<(usize, &Path)> = Vec::new();

@@ -438,7 +438,8 @@ impl Surface {
     }
 
     /// Fraction of the summed surface with J <= 0: exactly 0 where the layers' largest
-    /// strains prove that no read can fold ([`Surface::cannot_fold`]), else estimated on a
+    /// strains prove that no read with the surface's interpolation (`params.interp`, what
+    /// [`Surface::sampler`] reads) can fold ([`Surface::cannot_fold`]), else estimated on a
     /// jittered STATS_GRID^2 grid over the coarsest period.
     pub fn folded_fraction(&self) -> f64 {
         if self.cannot_fold() {
@@ -448,7 +449,8 @@ impl Surface {
         }
     }
 
-    /// True when J > 0 at every point a read can return: [`Surface::fold_bound`] is above a
+    /// True when J > 0 at every point a read with `params.interp` can return:
+    /// [`Surface::fold_bound`] is above a
     /// margin that covers f32 rounding in the reads and in J.
     pub fn cannot_fold(&self) -> bool {
         const MARGIN: f64 = 1e-3;

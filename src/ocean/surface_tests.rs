@@ -385,8 +385,8 @@ fn folding_is_detected_and_reported() {
 
 /// What the fold bound rests on: no read of a layer returns a strain larger than the layer's
 /// largest over its grid points times the read's reach (bilinear, Catmull-Rom), and the summed
-/// surface's J is never below the bound. Seas: the small test sea, and one whose choppiness
-/// makes the bound fail (so the bound is not claimed where it does not hold).
+/// surface's J is never below the bound. Seas: the small test sea, which the bound clears, and
+/// the same scaled until it folds, which it must not clear.
 #[test]
 fn fold_bound_holds_for_every_read() {
     let mut worst_ratio = [0.0f64; 2];
@@ -426,6 +426,8 @@ fn fold_bound_holds_for_every_read() {
             if chop == 1.0 {
                 assert!(s.cannot_fold(), "{interp:?}: bound {bound:?}");
             } else {
+                // a sea that does fold is not cleared by the bound
+                assert!(min_j <= 0.0, "{interp:?} x{chop}: J >= {min_j}");
                 assert!(!s.cannot_fold(), "{interp:?} x{chop}: bound {bound:?}");
             }
         }

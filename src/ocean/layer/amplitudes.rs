@@ -177,7 +177,9 @@ pub(super) struct BandCells {
 
 impl BandCells {
     pub fn new(n: usize, dk: f64, k_max: f64) -> BandCells {
-        let reach = ((k_max / dk).ceil() as usize).clamp(1, n / 2);
+        // floor + 1, not ceil: a cell s with s dk < k_max is kept even where k_max / dk rounds
+        // down to s (an integer ratio keeps one spare row and column of zeros)
+        let reach = ((k_max / dk).floor() as usize + 1).clamp(1, n / 2);
         BandCells {
             n,
             reach,

@@ -94,7 +94,7 @@ impl Layer {
         let rows = self.band_rows();
         for p in &mut planes.0 {
             // fresh zero pages (calloc), first touched by the row pass on every core: zeroing
-            // them here on one thread cost a 2048-texel layer a fifth of its time
+            // them here on one thread cost a 2048-texel layer a third of its time
             if p.len() < rows.len() * n {
                 *p = bytemuck::zeroed_vec(rows.len() * n);
             }
