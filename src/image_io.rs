@@ -417,8 +417,13 @@ pub fn auto_exposure(img: &RgbImage) -> f32 {
 /// [`auto_exposure`]), and the same in stops (what a report shows, and what a user can pass
 /// back as `--exposure` to keep it).
 pub fn png_exposure(stops: Option<f32>, img: &RgbImage) -> (f32, f32) {
-    let factor = stops.map_or_else(|| auto_exposure(img), f32::exp2);
-    (factor, factor.log2())
+    match stops {
+        Some(stops) => (stops.exp2(), stops),
+        None => {
+            let factor = auto_exposure(img);
+            (factor, factor.log2())
+        }
+    }
 }
 
 /// Writes an 8-bit sRGB PNG preview of a linear image.

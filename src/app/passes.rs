@@ -151,8 +151,7 @@ pub struct MergeJob {
 }
 
 /// Checks that passes belong to one render: the same scene (whatever threads and exposure each
-/// used), the
-/// same image, seed, samples and number of passes, and no pass twice.
+/// used), the same image, seed, samples and number of passes, and no pass twice.
 fn check_same_render(passes: &[Pass]) -> Result<(), AppError> {
     let first = &passes[0];
     let info = |p: &Pass| p.report.passes.clone().expect("read_pass checked");
