@@ -8,6 +8,7 @@ mod defects;
 #[cfg(feature = "embree")]
 mod embree;
 mod estimator;
+mod exact;
 mod far_field_glint;
 mod filtered;
 mod frames;

@@ -7,6 +7,7 @@
  */
 #include "embree_shim.h"
 
+#include <math.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -233,20 +234,99 @@ static void vo_fill_ray(struct RTCRay *r, const vo_ray *in) {
   r->flags = 0;
 }
 
-void vo_intersect1(void *scene, const vo_ray *ray, vo_hit *hit) {
+/* A query context that carries the caller's per-ray pointer to user geometry callbacks: Embree
+ * hands the callbacks the context it was given, so one that begins with Embree's own can be
+ * extended (Embree's documented way to pass per-ray data). */
+#if RTC_VERSION_MAJOR >= 4
+typedef struct vo_context {
+  struct RTCRayQueryContext ctx;
+  void *query;
+} vo_context;
+#else
+typedef struct vo_context {
+  struct RTCIntersectContext ctx;
+  void *query;
+} vo_context;
+#endif
+
+static void vo_user_bounds(const struct RTCBoundsFunctionArguments *args) {
+  const vo_user_geometry *g = (const vo_user_geometry *)args->geometryUserPtr;
+  float lo[3], hi[3];
+  g->bounds(g->user, args->primID, lo, hi);
+  args->bounds_o->lower_x = lo[0];
+  args->bounds_o->lower_y = lo[1];
+  args->bounds_o->lower_z = lo[2];
+  args->bounds_o->upper_x = hi[0];
+  args->bounds_o->upper_y = hi[1];
+  args->bounds_o->upper_z = hi[2];
+}
+
+/* The caller's test on one ray (N = 1: the shim only traces single rays). */
+static int vo_user_test(const vo_user_geometry *g, const vo_context *c, unsigned prim, const struct RTCRay *r,
+                        float *t, float *u, float *v) {
+  vo_ray in = {{r->org_x, r->org_y, r->org_z}, r->tnear, {r->dir_x, r->dir_y, r->dir_z}, r->tfar};
+  return g->intersect(g->user, c->query, prim, &in, t, u, v);
+}
+
+static void vo_user_intersect(const struct RTCIntersectFunctionNArguments *args) {
+  if (args->N != 1 || !args->valid[0]) return;
+  const vo_user_geometry *g = (const vo_user_geometry *)args->geometryUserPtr;
+  struct RTCRayHit *rh = (struct RTCRayHit *)args->rayhit;
+  float t, u, v;
+  if (!vo_user_test(g, (const vo_context *)args->context, args->primID, &rh->ray, &t, &u, &v)) return;
+  rh->ray.tfar = t;
+  rh->hit.u = u;
+  rh->hit.v = v;
+  rh->hit.Ng_x = 0.0f;
+  rh->hit.Ng_y = 1.0f;
+  rh->hit.Ng_z = 0.0f;
+  rh->hit.primID = args->primID;
+  rh->hit.geomID = args->geomID;
+  rh->hit.instID[0] = args->context->instID[0];
+}
+
+static void vo_user_occluded(const struct RTCOccludedFunctionNArguments *args) {
+  if (args->N != 1 || !args->valid[0]) return;
+  const vo_user_geometry *g = (const vo_user_geometry *)args->geometryUserPtr;
+  struct RTCRay *r = (struct RTCRay *)args->ray;
+  float t, u, v;
+  if (vo_user_test(g, (const vo_context *)args->context, args->primID, r, &t, &u, &v)) r->tfar = -INFINITY;
+}
+
+void *vo_scene_attach_user(void *device, void *scene, vo_quality quality, size_t prim_count,
+                           const vo_user_geometry *callbacks, uint32_t *geom_id) {
+  RTCGeometry g = rtcNewGeometry(vo_raw(device), RTC_GEOMETRY_TYPE_USER);
+  if (!g) return NULL;
+  rtcSetGeometryBuildQuality(g, vo_rtc_quality(quality));
+  rtcSetGeometryUserPrimitiveCount(g, (unsigned)prim_count);
+  rtcSetGeometryUserData(g, (void *)callbacks);
+  rtcSetGeometryBoundsFunction(g, vo_user_bounds, NULL);
+  rtcSetGeometryIntersectFunction(g, vo_user_intersect);
+  rtcSetGeometryOccludedFunction(g, vo_user_occluded);
+  rtcCommitGeometry(g);
+  unsigned id = rtcAttachGeometry((RTCScene)scene, g);
+  rtcReleaseGeometry(g);
+  if (geom_id) *geom_id = id;
+  return g;
+}
+
+static void vo_intersect_context(void *scene, const vo_ray *ray, vo_hit *hit, void *query) {
   struct RTCRayHit rh;
   vo_fill_ray(&rh.ray, ray);
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  vo_context c;
+  c.query = query;
 #if RTC_VERSION_MAJOR >= 4
+  rtcInitRayQueryContext(&c.ctx);
   struct RTCIntersectArguments args;
   rtcInitIntersectArguments(&args);
+  args.context = &c.ctx;
   rtcIntersect1((RTCScene)scene, &rh, &args);
 #else
-  struct RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  rtcIntersect1((RTCScene)scene, &ctx, &rh);
+  rtcInitIntersectContext(&c.ctx);
+  rtcIntersect1((RTCScene)scene, &c.ctx, &rh);
 #endif
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
     hit->t = ray->tfar;
@@ -266,6 +346,12 @@ void vo_intersect1(void *scene, const vo_ray *ray, vo_hit *hit) {
   hit->ng[2] = rh.hit.Ng_z;
 }
 
+void vo_intersect1(void *scene, const vo_ray *ray, vo_hit *hit) { vo_intersect_context(scene, ray, hit, NULL); }
+
+void vo_intersect1_query(void *scene, const vo_ray *ray, vo_hit *hit, void *query) {
+  vo_intersect_context(scene, ray, hit, query);
+}
+
 /* Not rtcIntersect16: see the header. One call per batch still saves the Rust side a foreign
  * call per ray; packets were no faster on the default scene (trace 3.03 s single, 3.07 s
  * packets, medians of six). */
@@ -276,14 +362,17 @@ void vo_intersect_batch(void *scene, const vo_ray *rays, vo_hit *hits, size_t n)
 int vo_occluded1(void *scene, const vo_ray *ray) {
   struct RTCRay r;
   vo_fill_ray(&r, ray);
+  vo_context c;
+  c.query = NULL;
 #if RTC_VERSION_MAJOR >= 4
+  rtcInitRayQueryContext(&c.ctx);
   struct RTCOccludedArguments args;
   rtcInitOccludedArguments(&args);
+  args.context = &c.ctx;
   rtcOccluded1((RTCScene)scene, &r, &args);
 #else
-  struct RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  rtcOccluded1((RTCScene)scene, &ctx, &r);
+  rtcInitIntersectContext(&c.ctx);
+  rtcOccluded1((RTCScene)scene, &c.ctx, &r);
 #endif
   /* Embree marks an occluded ray by setting tfar to -inf. */
   return r.tfar < 0.0f ? 1 : 0;

@@ -101,12 +101,37 @@ void vo_scene_commit(void *scene);
 void vo_scene_refit(void *scene, void *geometry);
 void vo_scene_bounds(void *scene, float lower[3], float upper[3]);
 
+/* User geometry: primitives the caller bounds and intersects itself (the exact ocean surface's
+ * prisms). `bounds` writes primitive prim's box; `intersect` tests primitive prim against the
+ * ray for a hit with t in [ray->tnear, ray->tfar] and on a hit writes *t, *u, *v and returns 1.
+ * `query` is the pointer handed to vo_intersect1_query for this ray (NULL from the other
+ * queries): per-ray state the caller keeps across the primitives one ray meets. Both are
+ * called from the threads that build and trace, at once. */
+typedef void (*vo_bounds_fn)(void *user, uint32_t prim, float lower[3], float upper[3]);
+typedef int (*vo_intersect_fn)(void *user, void *query, uint32_t prim, const vo_ray *ray, float *t,
+                               float *u, float *v);
+
+typedef struct vo_user_geometry {
+  vo_bounds_fn bounds;
+  vo_intersect_fn intersect;
+  void *user;
+} vo_user_geometry;
+
+/* Attaches prim_count user primitives and commits the geometry; `callbacks` (and what its user
+ * pointer points to) must outlive the scene. Hits report the primitive's id, the caller's
+ * (u, v) and a geometric normal of (0, 1, 0). Returns the geometry handle (owned by the scene)
+ * or NULL on error. */
+void *vo_scene_attach_user(void *device, void *scene, vo_quality quality, size_t prim_count,
+                           const vo_user_geometry *callbacks, uint32_t *geom_id);
+
 /* Queries; the scene must be committed. Safe to call from many threads at once. */
 void vo_intersect1(void *scene, const vo_ray *ray, vo_hit *hit);
 /* Traces n rays one by one (rtcIntersect1), each exactly as vo_intersect1 would: Embree's
  * packet kernels round differently from its single-ray kernel on some CPUs (AVX2), which made
  * a ray's hit depend on the batch it travelled in. */
 void vo_intersect_batch(void *scene, const vo_ray *rays, vo_hit *hits, size_t n);
+/* As vo_intersect1, handing `query` to user geometry's intersect callback. */
+void vo_intersect1_query(void *scene, const vo_ray *ray, vo_hit *hit, void *query);
 /* 1 when anything lies on the ray within [tnear, tfar], else 0. */
 int vo_occluded1(void *scene, const vo_ray *ray);
 /* Interpolates vertex-attribute slot 0 (the texture coordinate) at a hit. */

@@ -12,6 +12,7 @@ pub mod bvh;
 pub mod crosscheck;
 #[cfg(feature = "embree")]
 pub mod embree;
+pub mod exact;
 
 use crate::mesh::Mesh;
 
@@ -89,6 +90,13 @@ pub trait Accel: Send + Sync {
     fn interpolate_uv(&self, hit: &Hit) -> [f32; 2] {
         let m = self.mesh();
         Mesh::interpolate(m.uvs(), m.indices()[hit.prim as usize], hit.u, hit.v)
+    }
+    /// Whether hits lie on the displaced ocean itself ([`exact`]), not on the mesh's
+    /// triangles: the geometric normal at a hit is then the surface's own (the mapped normal),
+    /// a ray leaving a hit may meet the same prism again, and the mesh's slopes and heights
+    /// bound nothing.
+    fn exact_surface(&self) -> bool {
+        false
     }
     /// Short name for reports ("embree", "brute", ...).
     fn name(&self) -> &'static str;

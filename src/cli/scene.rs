@@ -63,6 +63,10 @@ pub struct SceneFlags {
     /// The BVH: Debian's Embree or the pure-Rust one.
     #[arg(long, value_parser = choice::<vastocean::config::Backend>())]
     backend: Option<vastocean::config::Backend>,
+    /// What the rays meet: the tessellation's triangles (mesh), or the displaced ocean itself
+    /// inside them (exact; docs/exact.md).
+    #[arg(long, value_parser = choice::<vastocean::config::SurfaceKind>())]
+    surface: Option<vastocean::config::SurfaceKind>,
     /// What to do when a shading normal would send a ray to the wrong side of its triangle
     /// (docs/accuracy.md, "The wrong-side policy").
     #[arg(long, value_parser = choice::<vastocean::config::WrongSide>())]
@@ -164,6 +168,7 @@ impl SceneFlags {
         s.render.seed = self.seed.unwrap_or(s.render.seed);
         s.render.threads = self.threads.unwrap_or(s.render.threads);
         s.render.backend = self.backend.unwrap_or(s.render.backend);
+        s.render.surface = self.surface.unwrap_or(s.render.surface);
         s.render.wrong_side = self.wrong_side.unwrap_or(s.render.wrong_side);
         s.ocean.interp = self.interp.unwrap_or(s.ocean.interp);
         Ok(s)

@@ -21,7 +21,7 @@ use thiserror::Error;
 pub use camera::{CameraConfig, Projection};
 pub use lod::{LodChoice, LodConfig, Pattern, Reading};
 pub use ocean::OceanParams;
-pub use render::{Backend, FilterLobe, NormalMode, RenderConfig, Water, WrongSide};
+pub use render::{Backend, FilterLobe, NormalMode, RenderConfig, SurfaceKind, Water, WrongSide};
 pub use sky::{AnalyticSky, SkyConfig};
 
 #[derive(Debug, Error)]
@@ -284,6 +284,24 @@ impl SceneConfig {
                 &format!("\"auto\" or stops within +-{}", render::MAX_EXPOSURE_STOPS),
                 e,
             ));
+        }
+        if r.surface == render::SurfaceKind::Exact {
+            if r.normals != NormalMode::Mapped {
+                return Err(invalid(
+                    "render.normals",
+                    "mapped with render.surface = \"exact\" (the surface's own normal at the \
+                     point hit)",
+                    r.normals,
+                ));
+            }
+            if self.ocean.interp != crate::ocean::Interp::Bilinear {
+                return Err(invalid(
+                    "ocean.interp",
+                    "bilinear with render.surface = \"exact\" (the only read the surface's \
+                     bounds cover)",
+                    self.ocean.interp,
+                ));
+            }
         }
         if !(1..=64).contains(&r.max_segments) {
             return Err(invalid("render.max_segments", "in 1..=64", r.max_segments));

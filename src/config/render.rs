@@ -83,6 +83,21 @@ impl Default for Backend {
     }
 }
 
+/// What the rays meet: the tessellation's triangles, or the displaced ocean itself inside them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum SurfaceKind {
+    /// The LOD mesh's triangles (the paper's).
+    #[default]
+    Mesh,
+    /// Beyond the paper: the first crossing of the summed layers' displaced surface, found
+    /// inside the prisms of the coarse mesh's triangles (wave hiding without a fine mesh;
+    /// docs/exact.md). Needs `mapped` normals and bilinear reads.
+    Exact,
+}
+
+super::choice!(SurfaceKind { Mesh => "mesh", Exact => "exact" });
+
 /// The render section of a scene.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -108,6 +123,8 @@ pub struct RenderConfig {
     /// Hits up to this depth branch into both reflection and refraction; deeper ones choose one.
     pub branch_depth: u32,
     pub backend: Backend,
+    /// What the rays meet (the mesh, or the exact displaced surface inside it).
+    pub surface: SurfaceKind,
     /// What to do when the shading normal disagrees with the triangle it shades.
     pub wrong_side: WrongSide,
     /// Embree: build a compact BVH (`RTC_SCENE_FLAG_COMPACT`): paper-high's render peak 3.15 ->
@@ -179,6 +196,7 @@ impl Default for RenderConfig {
             max_segments: 10,
             branch_depth: 3,
             backend: Backend::default(),
+            surface: SurfaceKind::Mesh,
             wrong_side: WrongSide::default(),
             compact_bvh: true,
             exposure: None,

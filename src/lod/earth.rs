@@ -50,6 +50,25 @@ pub fn curved_frame_point(
     (std::array::from_fn(|i| base[i] + d[i]), n)
 }
 
+/// The point of [`curved_frame_point`] alone, for a displacement `v` = (Dx, h, Dz) held in f64
+/// (the exact surface's root finder); the same arithmetic, so the same point.
+#[inline]
+pub fn curved_frame_position(x: f64, z: f64, v: [f64; 3], earth_radius_m: f64) -> [f64; 3] {
+    let r = x.hypot(z);
+    let (ux, uz) = if r > 0.0 { (x / r, z / r) } else { (1.0, 0.0) };
+    let theta = r / earth_radius_m;
+    let (st, ct) = theta.sin_cos();
+    let half = (0.5 * theta).sin();
+    let drop = 2.0 * earth_radius_m * half * half;
+    let base = [earth_radius_m * st * ux, -drop, earth_radius_m * st * uz];
+    let tr = [ct * ux, -st, ct * uz];
+    let ta = [-uz, 0.0, ux];
+    let up = [st * ux, ct, st * uz];
+    let radial = v[0] * ux + v[2] * uz;
+    let azim = -v[0] * uz + v[2] * ux;
+    std::array::from_fn(|i| base[i] + (radial * tr[i] + azim * ta[i] + v[1] * up[i]))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

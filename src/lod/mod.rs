@@ -54,7 +54,7 @@ use crate::ocean::Sampler;
 
 pub use crate::config::lod::{Pattern, Reading};
 
-pub use earth::{curved_frame_point, horizon_distance};
+pub use earth::{curved_frame_point, curved_frame_position, horizon_distance};
 
 /// Default earth radius, m (mean radius).
 pub const EARTH_RADIUS_M: f64 = 6_371_000.0;

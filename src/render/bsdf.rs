@@ -16,7 +16,9 @@ use glam::Vec3;
 
 use super::counters::Counters;
 use super::integrator::{SceneRef, TraceSettings};
-use super::interface::{SurfacePoint, bend_normal, bend_threshold, keep_side, surface_point};
+use super::interface::{
+    SurfacePoint, bend_normal, bend_threshold, exact_surface_point, keep_side, surface_point,
+};
 use super::microfacet::{Lobe, power_heuristic};
 use super::water::{fresnel, reflect, refract};
 use crate::accel::{Hit, Ray};
@@ -92,14 +94,19 @@ impl SceneRef<'_> {
     /// random numbers from `rng` (the path's own); a smooth one draws none.
     pub(super) fn scatter(
         &self,
-        d: Vec3,
+        ray: &Ray,
         hit: &Hit,
         shading: HitShading,
         settings: &TraceSettings,
         rng: &mut Rng,
         c: &mut Counters,
     ) -> Scatter {
-        let sp = surface_point(self.accel.mesh(), hit);
+        let d = Vec3::from(ray.dir);
+        let sp = if self.accel.exact_surface() {
+            exact_surface_point(ray, hit, shading.normal)
+        } else {
+            surface_point(self.accel.mesh(), hit)
+        };
         let from_below = d.dot(sp.ng) > 0.0;
         let attenuation = if from_below {
             settings.water.transmittance(hit.t)

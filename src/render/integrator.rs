@@ -356,8 +356,13 @@ impl SceneRef<'_> {
                 Some(hit) => {
                     c.hits += 1;
                     // A planar triangle cannot meet a ray leaving it twice: this is rounding.
-                    c.self_hits += u64::from(e.parent == Some(hit.prim));
-                    let d = Vec3::from(e.ray.dir);
+                    // A ray leaving the exact surface may meet its prism again (the next
+                    // wave), but not within a tenth of a millimetre of where it left.
+                    c.self_hits += u64::from(if self.accel.exact_surface() {
+                        e.parent.is_some() && hit.t * Vec3::from(e.ray.dir).length() < 1e-4
+                    } else {
+                        e.parent == Some(hit.prim)
+                    });
                     let shading = HitShading {
                         normal: normals[i],
                         cov: covs[i],
@@ -365,7 +370,7 @@ impl SceneRef<'_> {
                         segment,
                     };
                     let rng = &mut rngs[e.sample as usize];
-                    shaded[n_shaded] = (k, self.scatter(d, hit, shading, settings, rng, c));
+                    shaded[n_shaded] = (k, self.scatter(&e.ray, hit, shading, settings, rng, c));
                     n_shaded += 1;
                 }
             }

@@ -51,6 +51,8 @@ pub enum RenderError {
         triangles: u64,
         available: u64,
     },
+    #[error("the exact surface: {0}")]
+    Exact(String),
     #[error("the {backend} backend could not move the mesh to the next frame: {message}")]
     Refit {
         backend: &'static str,

@@ -17,9 +17,10 @@ pub use super::report::{PassInfo, RenderReport, Rendered, mean_luminance, warnin
 use super::{Camera, SceneRef, TraceSettings, render_image_samples};
 use crate::accel::bvh::Bvh;
 #[cfg(feature = "embree")]
-use crate::accel::embree::{BuildOptions, Device, Scene};
+use crate::accel::embree::{BuildOptions, Device, ExactScene, Scene};
+use crate::accel::exact::{Exact, ExactSurface};
 use crate::accel::{Accel, tracing_pool};
-use crate::config::{Backend, SceneConfig};
+use crate::config::{Backend, SceneConfig, SurfaceKind};
 use crate::lod::{EARTH_RADIUS_M, LodParams, LodStats, tessellate};
 use crate::ocean::Surface;
 use crate::sky::Sky;
@@ -202,7 +203,13 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
             bar.finish_and_clear();
             Ok((ocean, seconds_ocean, mesh, stats, t.elapsed().as_secs_f64()))
         })?;
-    let (skip_slope, skip_above_y) = pool.install(|| (max_slope(&mesh), highest_vertex_y(&mesh)));
+    let exact = cfg.render.surface == SurfaceKind::Exact;
+    // (the exact surface's bounds are its prisms', set below)
+    let (skip_slope, mut skip_above_y) = if exact {
+        (None, None)
+    } else {
+        pool.install(|| (max_slope(&mesh), highest_vertex_y(&mesh)))
+    };
     let mesh = Arc::new(mesh);
     let bar = phase(
         progress,
@@ -214,6 +221,31 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
     );
     let (accel, seconds_build, embree_version): (Box<dyn Accel>, f64, Option<String>) =
         match cfg.render.backend {
+            _ if exact => {
+                let surface =
+                    ExactSurface::new(ocean.clone(), cfg.camera.position_m, lod.earth_radius_m)
+                        .map_err(RenderError::Exact)?;
+                match cfg.render.backend {
+                    Backend::Rust => {
+                        let exact = pool.install(|| Exact::build(mesh, surface));
+                        skip_above_y = Some(exact.top_y());
+                        let s = exact.build_seconds();
+                        (Box::new(exact), s, None)
+                    }
+                    #[cfg(not(feature = "embree"))]
+                    Backend::Embree => return Err(RenderError::NoEmbree),
+                    #[cfg(feature = "embree")]
+                    Backend::Embree => {
+                        let device = Device::new(threads)?;
+                        let exact = pool.install(|| {
+                            ExactScene::new(&device, mesh, surface, BuildOptions::default())
+                        })?;
+                        skip_above_y = Some(exact.top_y());
+                        let s = exact.build_seconds();
+                        (Box::new(exact), s, Some(device.version()))
+                    }
+                }
+            }
             #[cfg(not(feature = "embree"))]
             Backend::Embree => return Err(RenderError::NoEmbree),
             #[cfg(feature = "embree")]
@@ -399,7 +431,7 @@ impl Prepared {
             accel: self.accel.as_ref(),
             skip_slope: self.skip_slope,
             skip_above_y: self.skip_above_y,
-            predict_camera_hits: true,
+            predict_camera_hits: !self.accel.exact_surface(),
             ocean: Some(sampler),
             earth_radius_m: self.lod.earth_radius_m,
             sky: &self.sky,

@@ -403,14 +403,19 @@ pub(super) struct Built {
 
 /// Builds the tree over `mesh` on the current rayon pool.
 pub(super) fn build_nodes(mesh: &Arc<Mesh>) -> Built {
-    let n = mesh.triangle_count();
-    let mut refs: Vec<PrimRef> = (0..n as u32)
-        .into_par_iter()
-        .map(|id| {
-            let mut bounds = Aabb::EMPTY;
-            mesh.triangle(id).iter().for_each(|&v| bounds.grow(v));
-            PrimRef::new(bounds, id)
-        })
+    build_over((0..mesh.triangle_count() as u32).into_par_iter().map(|id| {
+        let mut bounds = Aabb::EMPTY;
+        mesh.triangle(id).iter().for_each(|&v| bounds.grow(v));
+        bounds
+    }))
+}
+
+/// Builds the tree over primitives with boxes `bounds` (primitive `i` the `i`-th box), on the
+/// current rayon pool.
+pub(super) fn build_over(bounds: impl IndexedParallelIterator<Item = Aabb>) -> Built {
+    let mut refs: Vec<PrimRef> = bounds
+        .enumerate()
+        .map(|(id, b)| PrimRef::new(b, id as u32))
         .collect();
     let (b, cb) = refs
         .par_iter()

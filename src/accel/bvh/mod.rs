@@ -254,6 +254,72 @@ impl Accel for Bvh {
     }
 }
 
+/// A tree over boxes whose primitives the caller tests: the same build and walk as [`Bvh`]'s,
+/// for primitives that are not triangles (the exact surface's prisms).
+pub struct BoxTree {
+    nodes: Vec<Wide>,
+    /// Primitive index of each leaf-order slot.
+    ids: Vec<u32>,
+    depth: usize,
+}
+
+impl BoxTree {
+    /// Builds the tree over `boxes` (primitive `i` is `boxes[i]`, lower and upper corner) on
+    /// the current rayon pool.
+    pub fn build(boxes: &[([f32; 3], [f32; 3])]) -> BoxTree {
+        use rayon::prelude::*;
+        assert!(
+            !boxes.is_empty() && boxes.len() < Wide::NONE as usize,
+            "a box tree holds 1 to 2^32 - 2 boxes"
+        );
+        let build::Built { nodes, ids, depth } = build::build_over(boxes.par_iter().map(|b| {
+            let mut a = layout::Aabb::EMPTY;
+            a.grow(b.0);
+            a.grow(b.1);
+            a
+        }));
+        BoxTree { nodes, ids, depth }
+    }
+
+    /// The closest hit along `ray` within `[tnear, tfar]`: `test(prim, tmax)` answers for one
+    /// primitive whose box the ray meets, with `(t, u, v)` for a hit at `t <= tmax`.
+    pub fn closest(
+        &self,
+        ray: &Ray,
+        mut test: impl FnMut(u32, f32) -> Option<(f32, f32, f32)>,
+    ) -> Option<Hit> {
+        let p = traverse::Prepared::new(ray)?;
+        let found = traverse::walk::<false>(
+            &self.nodes,
+            self.depth,
+            &p,
+            ray.tfar,
+            |first, count, tmax| {
+                let mut best = None;
+                let mut tmax = tmax;
+                for slot in first..first + count {
+                    if let Some((t, u, v)) = test(self.ids[slot], tmax) {
+                        tmax = t;
+                        best = Some((slot, t, u, v));
+                    }
+                }
+                best
+            },
+        );
+        found.map(|(slot, t, u, v)| Hit {
+            t,
+            prim: self.ids[slot],
+            u,
+            v,
+        })
+    }
+
+    /// Bytes of the nodes and ids.
+    pub fn bytes(&self) -> usize {
+        std::mem::size_of_val(self.nodes.as_slice()) + std::mem::size_of_val(self.ids.as_slice())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::layout::Wide;

@@ -260,92 +260,119 @@ impl Bvh {
     /// Closest hit (or with `ANY`, the first hit found) within `[tnear, tfar]`.
     pub(super) fn traverse<const ANY: bool>(&self, ray: &Ray) -> Option<Hit> {
         let p = Prepared::new(ray)?;
-        let mut best_t = ray.tfar;
-        let mut best: Option<(usize, f32, f32)> = None;
-        let mut inline = [Entry::default(); INLINE_STACK];
-        let mut heap;
-        // A wide node pushes at most all its children but the one taken, once per level.
-        let need = (LANES - 1) * self.depth + 1;
-        let stack: &mut [Entry] = if need <= INLINE_STACK {
-            &mut inline
-        } else {
-            heap = vec![Entry::default(); need];
-            &mut heap
-        };
-        let mut sp = 0usize;
-        // The root is a wide node, whose box is not stored: its lanes are tested first thing.
-        let mut cur = Entry::default();
-        'outer: loop {
-            if cur.count == 0 {
-                let n = &self.nodes[cur.index as usize];
-                let (dist, mut mask) = p.slabs(n, best_t);
-                if mask != 0 {
-                    let lane = |l: u32| Entry {
-                        index: n.index[l as usize],
-                        count: n.count[l as usize],
-                        t: dist[l as usize],
-                    };
-                    let first = lane(mask.trailing_zeros());
-                    mask &= mask - 1;
-                    if mask == 0 {
-                        cur = first;
-                        continue;
-                    }
-                    // Two or more: push them all, sort the pushed run so the nearest is on top
-                    // (insertion sort of at most four), and take the nearest.
-                    let base = sp;
-                    stack[sp] = first;
-                    sp += 1;
-                    while mask != 0 {
-                        stack[sp] = lane(mask.trailing_zeros());
-                        sp += 1;
-                        mask &= mask - 1;
-                    }
-                    for i in base + 1..sp {
-                        let e = stack[i];
-                        let mut j = i;
-                        while j > base && stack[j - 1].t < e.t {
-                            stack[j] = stack[j - 1];
-                            j -= 1;
-                        }
-                        stack[j] = e;
-                    }
-                    sp -= 1;
-                    cur = stack[sp];
-                    continue;
-                }
-            } else {
-                let first = cur.index as usize;
-                for (i, tri) in self.tris[first..first + cur.count as usize]
-                    .iter()
-                    .enumerate()
-                {
-                    if let Some((t, u, v)) = p.triangle(tri, best_t) {
-                        best_t = t;
-                        best = Some((first + i, u, v));
+        let found = walk::<ANY>(
+            &self.nodes,
+            self.depth,
+            &p,
+            ray.tfar,
+            |first, count, tmax| {
+                let mut best = None;
+                let mut tmax = tmax;
+                for (i, tri) in self.tris[first..first + count].iter().enumerate() {
+                    if let Some((t, u, v)) = p.triangle(tri, tmax) {
+                        tmax = t;
+                        best = Some((first + i, t, u, v));
                         if ANY {
-                            break 'outer;
+                            break;
                         }
                     }
                 }
-            }
-            // Pop, skipping children that start beyond the closest hit found since the push.
-            loop {
-                if sp == 0 {
-                    break 'outer;
-                }
-                sp -= 1;
-                if stack[sp].t <= best_t {
-                    cur = stack[sp];
-                    break;
-                }
-            }
-        }
-        best.map(|(i, u, v)| Hit {
-            t: best_t,
+                best
+            },
+        );
+        found.map(|(i, t, u, v)| Hit {
+            t,
             prim: self.prims[i],
             u,
             v,
         })
     }
+}
+
+/// The walk every tree of wide nodes shares: the four children's boxes at once, nearest child
+/// first with a short stack. `leaf(first, count, tmax)` tests the primitives in leaf-order slots
+/// `first..first + count` and returns the closest hit among them with `t <= tmax` as
+/// `(slot, t, u, v)`; the walk returns the closest over all leaves (with `ANY`, the first found).
+#[inline(always)]
+pub(super) fn walk<const ANY: bool>(
+    nodes: &[Wide],
+    depth: usize,
+    p: &Prepared,
+    tfar: f32,
+    mut leaf: impl FnMut(usize, usize, f32) -> Option<(usize, f32, f32, f32)>,
+) -> Option<(usize, f32, f32, f32)> {
+    let mut best_t = tfar;
+    let mut best: Option<(usize, f32, f32, f32)> = None;
+    let mut inline = [Entry::default(); INLINE_STACK];
+    let mut heap;
+    // A wide node pushes at most all its children but the one taken, once per level.
+    let need = (LANES - 1) * depth + 1;
+    let stack: &mut [Entry] = if need <= INLINE_STACK {
+        &mut inline
+    } else {
+        heap = vec![Entry::default(); need];
+        &mut heap
+    };
+    let mut sp = 0usize;
+    // The root is a wide node, whose box is not stored: its lanes are tested first thing.
+    let mut cur = Entry::default();
+    'outer: loop {
+        if cur.count == 0 {
+            let n = &nodes[cur.index as usize];
+            let (dist, mut mask) = p.slabs(n, best_t);
+            if mask != 0 {
+                let lane = |l: u32| Entry {
+                    index: n.index[l as usize],
+                    count: n.count[l as usize],
+                    t: dist[l as usize],
+                };
+                let first = lane(mask.trailing_zeros());
+                mask &= mask - 1;
+                if mask == 0 {
+                    cur = first;
+                    continue;
+                }
+                // Two or more: push them all, sort the pushed run so the nearest is on top
+                // (insertion sort of at most four), and take the nearest.
+                let base = sp;
+                stack[sp] = first;
+                sp += 1;
+                while mask != 0 {
+                    stack[sp] = lane(mask.trailing_zeros());
+                    sp += 1;
+                    mask &= mask - 1;
+                }
+                for i in base + 1..sp {
+                    let e = stack[i];
+                    let mut j = i;
+                    while j > base && stack[j - 1].t < e.t {
+                        stack[j] = stack[j - 1];
+                        j -= 1;
+                    }
+                    stack[j] = e;
+                }
+                sp -= 1;
+                cur = stack[sp];
+                continue;
+            }
+        } else if let Some(h) = leaf(cur.index as usize, cur.count as usize, best_t) {
+            best_t = h.1;
+            best = Some(h);
+            if ANY {
+                break 'outer;
+            }
+        }
+        // Pop, skipping children that start beyond the closest hit found since the push.
+        loop {
+            if sp == 0 {
+                break 'outer;
+            }
+            sp -= 1;
+            if stack[sp].t <= best_t {
+                cur = stack[sp];
+                break;
+            }
+        }
+    }
+    best
 }

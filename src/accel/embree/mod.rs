@@ -13,10 +13,12 @@
 mod describe;
 mod device;
 mod scene;
+mod user;
 
 pub use describe::{EmbreeInfo, describe, versions};
 pub use device::{Device, flush_denormals_on_this_thread};
 pub use scene::Scene;
+pub use user::ExactScene;
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;

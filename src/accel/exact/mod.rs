@@ -1,0 +1,350 @@
+//! Exact hits on the displaced ocean, found inside the coarse tessellation's triangles instead
+//! of on them: wave hiding without a fine mesh.
+//!
+//! Each coarse triangle bounds a prism: the box that provably holds the displaced surface X(x)
+//! for every nominal position x of the triangle (the sphere under its corners, widened by the
+//! layers' h bounds over the triangle from their pyramids, the largest horizontal displacement
+//! and the curved frame's tilt of it). A ray that meets a prism searches its stretch inside it
+//! for the first crossing of the whole surface ([`search`]: interval bounds, a certified march,
+//! a bracketed root on the implicit function of [`implicit`]). Prisms overlap by the
+//! displacement, so a crossing may be found from more than one; each reports the same first
+//! crossing of its stretch, so the closest over all prisms is the ray's. The hit names the
+//! prism's triangle and the barycentrics, relative to its corners' texture coordinates, of the
+//! nominal position of the surface point hit (outside the triangle where the crossing lies in
+//! a neighbour's part of the overlap): the texture coordinate interpolated at the hit is that
+//! nominal position, so normal mapping reads the surface's own normal there.
+//!
+//! Only bilinear reads are supported: a bilinear value lies between its texels', which the
+//! pyramids bound; a Catmull-Rom read overshoots them.
+
+mod bounds;
+mod implicit;
+mod search;
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+use super::bvh::BoxTree;
+use super::{Accel, Hit, Ray};
+use crate::mesh::Mesh;
+use crate::ocean::{Interp, Surface};
+use bounds::SurfaceBounds;
+use implicit::Implicit;
+
+/// How far an exact hit point may lie from the surface along the normal, m, beyond its f32
+/// rounding: the root finder's tolerance on F with room. The integrator offsets the rays that
+/// leave an exact hit by this much more than a triangle hit's.
+pub const ROOT_ERROR_M: f32 = 4.0 * search::TOL_F as f32;
+
+/// The displaced surface of an ocean around one camera origin, with the bounds the intersector
+/// needs.
+pub struct ExactSurface {
+    ocean: Arc<Surface>,
+    origin: [f64; 2],
+    earth_radius_m: f64,
+    bounds: SurfaceBounds,
+    /// The summed layers' largest |Dx| and |Dz|, m.
+    disp: [f64; 2],
+    /// The largest |(Dx, h, Dz)|, m.
+    disp_norm: f64,
+    /// How far above h a surface point's altitude can be: |D|^2 / 2R (the displacement is
+    /// tangent to the sphere at its base), m.
+    altitude_slack: f64,
+    /// The surface's slope bound (height over arc position), if the strain bound proves one.
+    slope: Option<f64>,
+    /// Segments are halved down to this length (arc), m: below the widening by the
+    /// displacement, the bounds do not narrow.
+    split_m: f64,
+    /// The shortest step of the march, m: half the finest layer's texel.
+    floor_m: f64,
+}
+
+impl ExactSurface {
+    /// The surface of `ocean` as a camera at world position `origin` (x, z) sees it, on an
+    /// earth of radius `earth_radius_m`.
+    pub fn new(
+        ocean: Arc<Surface>,
+        origin: [f64; 2],
+        earth_radius_m: f64,
+    ) -> Result<ExactSurface, String> {
+        if ocean.params().interp != Interp::Bilinear {
+            return Err(format!(
+                "the exact surface reads the layers bilinearly; ocean.interp is {}",
+                ocean.params().interp
+            ));
+        }
+        let bounds = SurfaceBounds::new(&ocean.sampler(origin));
+        let disp = bounds.disp();
+        let h = bounds.height_limit();
+        let disp_norm = (disp[0] * disp[0] + disp[1] * disp[1] + h * h).sqrt();
+        let finest = ocean
+            .layers()
+            .iter()
+            .map(|l| l.dx())
+            .fold(f64::INFINITY, f64::min);
+        Ok(ExactSurface {
+            altitude_slack: (disp[0] * disp[0] + disp[1] * disp[1]) / earth_radius_m + 1e-6,
+            slope: bounds.slope_limit(),
+            split_m: disp[0].max(disp[1]).max(8.0 * finest),
+            floor_m: 0.5 * finest,
+            ocean,
+            origin,
+            earth_radius_m,
+            bounds,
+            disp,
+            disp_norm,
+        })
+    }
+
+    fn implicit(&self) -> Implicit<'_> {
+        Implicit {
+            sampler: self.ocean.sampler(self.origin),
+            earth_radius_m: self.earth_radius_m,
+            lip: self.slope.map_or(f64::INFINITY, |s| 1.0 + s),
+        }
+    }
+
+    /// The slope bound the march uses, if any.
+    pub fn slope_limit(&self) -> Option<f64> {
+        self.slope
+    }
+
+    /// The box that holds the surface over the triangle of nominal corners `uv`.
+    pub fn prism(&self, uv: [[f32; 2]; 3]) -> ([f32; 3], [f32; 3]) {
+        let r = self.earth_radius_m;
+        let uv = uv.map(|c| c.map(f64::from));
+        let (x0, x1) = (
+            uv.iter().map(|c| c[0]).fold(f64::INFINITY, f64::min),
+            uv.iter().map(|c| c[0]).fold(f64::NEG_INFINITY, f64::max),
+        );
+        let (z0, z1) = (
+            uv.iter().map(|c| c[1]).fold(f64::INFINITY, f64::min),
+            uv.iter().map(|c| c[1]).fold(f64::NEG_INFINITY, f64::max),
+        );
+        let [hlo, hhi] = self.bounds.height(x0, x1, z0, z1);
+        // the sphere under the corners, and how far the patch between them can bulge past
+        // their box (a chord's sagitta d^2 / 8R, with room)
+        let base = uv.map(|c| crate::lod::curved_frame_position(c[0], c[1], [0.0; 3], r));
+        let d = (x1 - x0).hypot(z1 - z0);
+        let bulge = d * d / r + 1e-3;
+        let far = uv.iter().map(|c| c[0].hypot(c[1])).fold(0.0, f64::max) + d;
+        // the tilt of the displacement away from the nadir's axes: a rotation by at most
+        // theta moves a vector by at most theta times its length
+        let tilt = self.disp_norm * (far / r);
+        let lo = std::array::from_fn(|k| base.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min));
+        let hi =
+            std::array::from_fn(|k| base.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max));
+        let (lo, hi): ([f64; 3], [f64; 3]) = (lo, hi);
+        let widen_lo = [-self.disp[0], hlo, -self.disp[1]];
+        let widen_hi = [self.disp[0], hhi, self.disp[1]];
+        // f32 corners rounded outwards
+        let out = |v: f64, up: bool| -> f32 {
+            let m = v.abs() * 1e-6 + 1e-4;
+            (if up { v + m } else { v - m }) as f32
+        };
+        (
+            std::array::from_fn(|k| out(lo[k] + widen_lo[k] - bulge - tilt, false)),
+            std::array::from_fn(|k| out(hi[k] + widen_hi[k] + bulge + tilt, true)),
+        )
+    }
+
+    /// The first crossing of the surface by `ray` inside `prism` with t at most `tmax`, as
+    /// `(t, u, v)`: (u, v) the barycentrics of the nominal position hit relative to the
+    /// triangle's texture coordinates `uv`.
+    pub fn intersect_prism(
+        &self,
+        ray: &Ray,
+        uv: [[f32; 2]; 3],
+        prism: &([f32; 3], [f32; 3]),
+        tmax: f32,
+        searched: &mut Searched,
+    ) -> Option<(f32, f32, f32)> {
+        let o = ray.org.map(f64::from);
+        let d = ray.dir.map(f64::from);
+        let (mut t0, mut t1) = (ray.tnear.max(0.0) as f64, tmax as f64);
+        for k in 0..3 {
+            let (lo, hi) = (prism.0[k] as f64, prism.1[k] as f64);
+            if d[k] == 0.0 {
+                if o[k] < lo || o[k] > hi {
+                    return None;
+                }
+                continue;
+            }
+            let (a, b) = ((lo - o[k]) / d[k], (hi - o[k]) / d[k]);
+            t0 = t0.max(a.min(b));
+            t1 = t1.min(a.max(b));
+        }
+        let (t, x) = searched.search(t0, t1, |a, b| self.first_crossing(o, d, a, b))?;
+        let t32 = t as f32;
+        if !(t32 >= ray.tnear && t32 <= tmax) {
+            return None;
+        }
+        let uv = uv.map(|c| c.map(f64::from));
+        let (e1, e2) = (
+            [uv[1][0] - uv[0][0], uv[1][1] - uv[0][1]],
+            [uv[2][0] - uv[0][0], uv[2][1] - uv[0][1]],
+        );
+        let q = [x[0] - uv[0][0], x[1] - uv[0][1]];
+        let det = e1[0] * e2[1] - e1[1] * e2[0];
+        let u = (q[0] * e2[1] - q[1] * e2[0]) / det;
+        let v = (e1[0] * q[1] - e1[1] * q[0]) / det;
+        Some((t32, u as f32, v as f32))
+    }
+
+    /// Bytes of the bounds (the layers are the ocean's).
+    pub fn bytes(&self) -> usize {
+        self.bounds.bytes()
+    }
+}
+
+/// The stretch of one ray already searched: prisms overlap, and a stretch searched from one
+/// need not be searched again from the next (a camera ray near the camera crosses some 17
+/// prism boxes over one stretch of sea).
+#[derive(Clone, Copy, Debug)]
+pub struct Searched {
+    a: f64,
+    b: f64,
+}
+
+impl Default for Searched {
+    fn default() -> Self {
+        Searched {
+            a: f64::INFINITY,
+            b: f64::NEG_INFINITY,
+        }
+    }
+}
+
+impl Searched {
+    /// The first crossing in `[t0, t1]` by `search` over the parts not searched before; the
+    /// searched stretch grows to cover `[t0, t1]` (up to the crossing, if one is found), or is
+    /// replaced by it when the two are apart.
+    fn search(
+        &mut self,
+        t0: f64,
+        t1: f64,
+        mut search: impl FnMut(f64, f64) -> Option<(f64, [f64; 2])>,
+    ) -> Option<(f64, [f64; 2])> {
+        if t0.is_nan() || t1.is_nan() || t0 > t1 {
+            return None;
+        }
+        if t1 < self.a || t0 > self.b {
+            let hit = search(t0, t1);
+            *self = Searched {
+                a: t0,
+                b: hit.map_or(t1, |h| h.0),
+            };
+            return hit;
+        }
+        if t0 < self.a {
+            let hit = search(t0, self.a);
+            self.a = t0;
+            if let Some(h) = hit {
+                self.b = h.0;
+                return hit;
+            }
+        }
+        if t1 > self.b {
+            let hit = search(self.b, t1);
+            self.b = hit.map_or(t1, |h| h.0);
+            return hit;
+        }
+        None
+    }
+}
+
+/// The exact surface behind the Rust backend's tree of prisms (backend name "rust-exact").
+pub struct Exact {
+    mesh: Arc<Mesh>,
+    surface: ExactSurface,
+    prisms: Vec<([f32; 3], [f32; 3])>,
+    tree: BoxTree,
+    top_y: f32,
+    build_seconds: f64,
+    rejected: AtomicU64,
+}
+
+impl Exact {
+    /// The prisms of every triangle of the coarse `mesh` and the tree over them, on the
+    /// current rayon pool.
+    pub fn build(mesh: Arc<Mesh>, surface: ExactSurface) -> Exact {
+        use rayon::prelude::*;
+        let start = Instant::now();
+        let prisms = prisms_of(&mesh, &surface);
+        let tree = BoxTree::build(&prisms);
+        let top_y = prisms
+            .par_iter()
+            .map(|p| p.1[1])
+            .reduce(|| f32::NEG_INFINITY, f32::max);
+        Exact {
+            mesh,
+            surface,
+            prisms,
+            tree,
+            top_y,
+            build_seconds: start.elapsed().as_secs_f64(),
+            rejected: AtomicU64::new(0),
+        }
+    }
+
+    /// Seconds the prisms and their tree took.
+    pub fn build_seconds(&self) -> f64 {
+        self.build_seconds
+    }
+
+    /// The highest point of any prism: nothing of the surface lies above it.
+    pub fn top_y(&self) -> f32 {
+        self.top_y
+    }
+
+    /// The surface searched.
+    pub fn surface(&self) -> &ExactSurface {
+        &self.surface
+    }
+}
+
+/// The prism of every triangle of `mesh`, in triangle order.
+pub fn prisms_of(mesh: &Mesh, surface: &ExactSurface) -> Vec<([f32; 3], [f32; 3])> {
+    use rayon::prelude::*;
+    let (uvs, idx) = (mesh.uvs(), mesh.indices());
+    idx.par_iter()
+        .map(|t| surface.prism(t.map(|v| uvs[v as usize])))
+        .collect()
+}
+
+impl Accel for Exact {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        if !ray.is_finite() {
+            self.rejected.fetch_add(1, Ordering::Relaxed);
+            return None;
+        }
+        let (uvs, idx) = (self.mesh.uvs(), self.mesh.indices());
+        let mut searched = Searched::default();
+        self.tree.closest(ray, |prim, tmax| {
+            let uv = idx[prim as usize].map(|v| uvs[v as usize]);
+            let prism = &self.prisms[prim as usize];
+            self.surface
+                .intersect_prism(ray, uv, prism, tmax, &mut searched)
+        })
+    }
+    fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+    fn name(&self) -> &'static str {
+        "rust-exact"
+    }
+    fn exact_surface(&self) -> bool {
+        true
+    }
+    fn rejected_rays(&self) -> u64 {
+        self.rejected.load(Ordering::Relaxed)
+    }
+    fn bytes(&self) -> u64 {
+        (self.tree.bytes() + std::mem::size_of_val(self.prisms.as_slice()) + self.surface.bytes())
+            as u64
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,210 @@
+//! The first crossing of a ray segment with the implicit surface: interval bounds to skip, a
+//! march with steps the surface's slope bound certifies, and a bracketed root.
+//!
+//! A segment [ta, tb] of the ray cannot meet the surface when the ray's altitude over it stays
+//! above the largest surface altitude over the arc positions it passes (or below the
+//! smallest): the ray's altitude is convex in t (a distance from the sphere's centre), so its
+//! range is its end values and its closest approach; the surface's range is the layers'
+//! pyramids over the segment's arc positions widened by the largest horizontal displacement
+//! (x = s - D). Segments that are not cleared are halved until they are shorter than
+//! [`ExactSurface::split_m`], then marched: from a point where F = f, the surface cannot be
+//! reached before |f| / K, K = (1 + slope bound) |d| bounding dF/dt, so that step is taken
+//! when it is longer than the floor (half the finest texel), and the floor otherwise. The
+//! floor is what the march does not certify: a crest the ray clips over less than the floor
+//! (both crossings between two points) is not seen. A sign change brackets a root, which the
+//! Illinois variant of false position narrows to [`TOL_F`].
+
+use super::ExactSurface;
+use super::implicit::{Eval, Implicit, Warm, sphere_coords};
+
+/// |F| at which a root is accepted, m: the error the hit point carries into the integrator's
+/// offset of the next ray's origin ([`super::ROOT_ERROR_M`] covers it).
+pub(super) const TOL_F: f64 = 2e-7;
+/// Most halvings of one ray's segment before it is marched whatever its length.
+const MAX_DEPTH: u32 = 40;
+
+/// One end of a segment: its t, arc position and altitude.
+#[derive(Clone, Copy)]
+struct End {
+    t: f64,
+    s: [f64; 2],
+    a: f64,
+}
+
+/// A ray in f64 and what the search reuses along it.
+struct RayPath<'a> {
+    o: [f64; 3],
+    d: [f64; 3],
+    /// |d|
+    len: f64,
+    /// t of the ray's closest approach to the sphere's centre (where its altitude is least).
+    t_low: f64,
+    imp: Implicit<'a>,
+    warm: Option<Warm>,
+    r: f64,
+}
+
+impl RayPath<'_> {
+    #[inline]
+    fn at(&self, t: f64) -> [f64; 3] {
+        std::array::from_fn(|k| self.o[k] + t * self.d[k])
+    }
+    #[inline]
+    fn end(&self, t: f64) -> End {
+        let (s, a) = sphere_coords(self.at(t), self.r);
+        End { t, s, a }
+    }
+    #[inline]
+    fn eval(&mut self, t: f64) -> Eval {
+        self.imp.eval(self.at(t), &mut self.warm)
+    }
+}
+
+impl ExactSurface {
+    /// The first t in `[t0, t1]` where the ray `o + t d` crosses the surface (from either
+    /// side), and the nominal position of the surface point there.
+    pub(super) fn first_crossing(
+        &self,
+        o: [f64; 3],
+        d: [f64; 3],
+        t0: f64,
+        t1: f64,
+    ) -> Option<(f64, [f64; 2])> {
+        if t0.is_nan() || t1.is_nan() || t0 > t1 {
+            return None;
+        }
+        let r = self.earth_radius_m;
+        let dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        let rel = [o[0], o[1] + r, o[2]];
+        let mut ray = RayPath {
+            o,
+            d,
+            len: dd.sqrt(),
+            t_low: -(rel[0] * d[0] + rel[1] * d[1] + rel[2] * d[2]) / dd,
+            imp: self.implicit(),
+            warm: None,
+            r,
+        };
+        // the side the ray is on where its search starts, known after the first evaluation
+        let mut side: Option<(f64, Eval)> = None;
+        let mut stack: Vec<(End, End, u32)> = Vec::with_capacity(2 * MAX_DEPTH as usize);
+        stack.push((ray.end(t0), ray.end(t1), 0));
+        while let Some((a, b, depth)) = stack.pop() {
+            if self.clears(&ray, &a, &b) {
+                continue;
+            }
+            let ds = (b.s[0] - a.s[0]).hypot(b.s[1] - a.s[1]);
+            if ds > self.split_m && depth < MAX_DEPTH {
+                let m = ray.end(0.5 * (a.t + b.t));
+                stack.push((m, b, depth + 1));
+                stack.push((a, m, depth + 1));
+                continue;
+            }
+            let (t_prev, e_prev) = match side {
+                Some((t, e)) if t == a.t => (t, e),
+                _ => (a.t, ray.eval(a.t)),
+            };
+            if e_prev.f == 0.0 {
+                return Some((t_prev, e_prev.x));
+            }
+            match self.march(&mut ray, t_prev, e_prev, b.t) {
+                Ok(hit) => return Some(hit),
+                // no crossing up to b: the next segment starts on the same side
+                Err(at_b) => side = Some((b.t, at_b)),
+            }
+        }
+        None
+    }
+
+    /// Whether the ray's altitude over `[a.t, b.t]` stays clear of the surface's range over
+    /// the arc positions it passes.
+    #[inline]
+    fn clears(&self, ray: &RayPath, a: &End, b: &End) -> bool {
+        let len = (b.t - a.t) * ray.len;
+        let far = a.s[0].hypot(a.s[1]).max(b.s[0].hypot(b.s[1])) + len;
+        // how far the arc positions of a straight segment stray from their chord, with room
+        let slack = 1e-4 + len * len * far / (self.earth_radius_m * self.earth_radius_m);
+        let [dx, dz] = self.disp;
+        let x0 = a.s[0].min(b.s[0]) - slack - dx;
+        let x1 = a.s[0].max(b.s[0]) + slack + dx;
+        let z0 = a.s[1].min(b.s[1]) - slack - dz;
+        let z1 = a.s[1].max(b.s[1]) + slack + dz;
+        let [lo, hi] = self.bounds.height(x0, x1, z0, z1);
+        let hi = hi + self.altitude_slack;
+        let ray_hi = a.a.max(b.a);
+        if ray_hi < lo {
+            return true;
+        }
+        let ray_lo = if a.t < ray.t_low && ray.t_low < b.t {
+            ray.end(ray.t_low).a
+        } else {
+            a.a.min(b.a)
+        };
+        ray_lo > hi
+    }
+
+    /// Marches from `t` (where F is `e`) to `t_end`: the first crossing, or F at `t_end`.
+    fn march(
+        &self,
+        ray: &mut RayPath,
+        mut t: f64,
+        mut e: Eval,
+        t_end: f64,
+    ) -> Result<(f64, [f64; 2]), Eval> {
+        let floor = self.floor_m / ray.len;
+        // |dF/dt| <= |da/dt| + slope |ds/dt|; within 60 km of the nadir (tilt under 0.01 rad)
+        // the altitude and arc position move with the ray's vertical and horizontal parts,
+        // each leaking at most 1 % into the other
+        let (dv, dh) = (ray.d[1].abs(), ray.d[0].hypot(ray.d[2]));
+        let k = self
+            .slope
+            .map(|s| 1.01 * (dv + 0.01 * dh + s * (dh + 0.01 * dv)) + 1e-9);
+        while t < t_end {
+            // (F is known to a tenth of itself while it is far from zero)
+            let certified = k.map_or(0.0, |k| 0.9 * e.f.abs() / k);
+            let tn = (t + certified.max(floor)).min(t_end);
+            let en = ray.eval(tn);
+            if (en.f > 0.0) != (e.f > 0.0) || en.f == 0.0 {
+                return Ok(self.root(ray, (t, e), (tn, en)));
+            }
+            (t, e) = (tn, en);
+        }
+        Err(e)
+    }
+
+    /// The root of F between `a` and `b`, whose F differ in sign: false position with the
+    /// Illinois halving, down to |F| <= [`TOL_F`] or a bracket of 1e-9 of t.
+    fn root(&self, ray: &mut RayPath, a: (f64, Eval), b: (f64, Eval)) -> (f64, [f64; 2]) {
+        let (mut ta, mut fa) = (a.0, a.1.f);
+        let (mut tb, mut eb) = b;
+        let mut fb = eb.f;
+        if fb == 0.0 {
+            return (tb, eb.x);
+        }
+        let mut kept = 0i8;
+        for _ in 0..100 {
+            let mut tm = tb - fb * (tb - ta) / (fb - fa);
+            if !(tm > ta.min(tb) && tm < ta.max(tb)) {
+                tm = 0.5 * (ta + tb);
+            }
+            let em = ray.eval(tm);
+            if em.f.abs() <= TOL_F || (tb - ta).abs() * ray.len <= 1e-9 * (1.0 + tm * ray.len) {
+                return (tm, em.x);
+            }
+            if (em.f > 0.0) == (fa > 0.0) {
+                (ta, fa) = (tm, em.f);
+                if kept == 1 {
+                    fb *= 0.5;
+                }
+                kept = 1;
+            } else {
+                (tb, eb, fb) = (tm, em, em.f);
+                if kept == -1 {
+                    fa *= 0.5;
+                }
+                kept = -1;
+            }
+        }
+        (tb, eb.x)
+    }
+}

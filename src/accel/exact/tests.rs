@@ -1,0 +1,252 @@
+//! Tests of the exact surface: the pyramids' bounds against every read, the implicit function
+//! on and off the surface, the prisms around their patches, and hits against a dense march.
+
+use std::sync::Arc;
+
+use super::implicit::sphere_coords;
+use super::*;
+use crate::lod::{LodParams, Pattern, Reading, tessellate};
+use crate::ocean::{LayerSpec, OceanParams, field};
+use crate::rng::Rng;
+
+const EARTH_R: f64 = crate::lod::EARTH_RADIUS_M;
+const CAMERA_M: f64 = 5.0;
+
+fn sea(choppiness: f64) -> Arc<Surface> {
+    let p = OceanParams {
+        layers: vec![
+            LayerSpec {
+                size_m: 200.0,
+                n: 128,
+            },
+            LayerSpec {
+                size_m: 23.7,
+                n: 128,
+            },
+            LayerSpec {
+                size_m: 2.93,
+                n: 64,
+            },
+        ],
+        choppiness,
+        ..OceanParams::default()
+    };
+    Arc::new(Surface::new(&p, 7).unwrap())
+}
+
+fn coarse_mesh(ocean: &Surface, origin: [f64; 2]) -> Mesh {
+    let params = LodParams {
+        near_size_m: 0.9,
+        double_distance_m: 18.0,
+        generations: None,
+        max_distance_m: Some(300.0),
+        pattern: Pattern::Square,
+        reading: Reading::default(),
+        earth_radius_m: EARTH_R,
+        camera_height_m: CAMERA_M,
+    };
+    tessellate(&params, &ocean.sampler(origin)).unwrap().0
+}
+
+#[test]
+fn pyramid_bounds_hold_every_read_and_narrow_with_the_box() {
+    let ocean = sea(1.0);
+    let origin = [1234.5, -987.25];
+    let sampler = ocean.sampler(origin);
+    let b = SurfaceBounds::new(&sampler);
+    let global = b.height(-1e6, 1e6, -1e6, 1e6);
+    let mut rng = Rng::keyed(&[3]);
+    let mut narrower = 0;
+    for _ in 0..400 {
+        let (x0, z0) = (rng.f64() * 600.0 - 300.0, rng.f64() * 600.0 - 300.0);
+        let size = 0.01 * 1e4f64.powf(rng.f64()); // 1 cm to 100 m
+        let (x1, z1) = (x0 + size, z0 + size * rng.f64());
+        let [lo, hi] = b.height(x0, x1, z0, z1);
+        assert!(lo >= global[0] && hi <= global[1]);
+        narrower += usize::from(hi - lo < 0.5 * (global[1] - global[0]));
+        for _ in 0..50 {
+            let (x, z) = (x0 + (x1 - x0) * rng.f64(), z0 + (z1 - z0) * rng.f64());
+            let h = sampler.fields_f64(x, z)[field::H] as f64;
+            assert!(lo <= h && h <= hi, "{h} outside [{lo}, {hi}] at ({x}, {z})");
+        }
+    }
+    // boxes of centimetres to metres are far narrower than the whole sea's range
+    assert!(
+        narrower > 200,
+        "{narrower} of 400 boxes narrower than half the range"
+    );
+}
+
+#[test]
+fn implicit_function_is_the_signed_altitude_above_the_surface() {
+    for chop in [0.0, 1.0] {
+        let ocean = sea(chop);
+        let origin = [50.0, 20.0];
+        let surface = ExactSurface::new(ocean.clone(), origin, EARTH_R).unwrap();
+        // inversions to full accuracy, and as a march runs them (to a tenth of F)
+        let imp = Implicit {
+            lip: f64::INFINITY,
+            ..surface.implicit()
+        };
+        let marching = surface.implicit();
+        let mut rng = Rng::keyed(&[5]);
+        for _ in 0..300 {
+            let r = 5000.0 * rng.f64();
+            let phi = std::f64::consts::TAU * rng.f64();
+            let x = [r * phi.cos(), r * phi.sin()];
+            let f = imp.sampler.fields_f64(x[0], x[1]);
+            let v = [f[field::DX] as f64, f[field::H] as f64, f[field::DZ] as f64];
+            let p = crate::lod::curved_frame_position(x[0], x[1], v, EARTH_R);
+            let e = imp.eval(p, &mut None);
+            assert!(e.f.abs() < 1e-6, "F = {} on the surface (chop {chop})", e.f);
+            assert!(
+                (e.x[0] - x[0]).abs() < 1e-4 && (e.x[1] - x[1]).abs() < 1e-4,
+                "nominal {x:?} found as {:?}",
+                e.x
+            );
+            // straight up and down from the surface point: F is the altitude difference
+            let (s, _) = sphere_coords(p, EARTH_R);
+            let up = {
+                let c = [p[0], p[1] + EARTH_R, p[2]];
+                let l = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+                c.map(|k| k / l)
+            };
+            for delta in [-0.01, 0.01, 0.3] {
+                let q = std::array::from_fn(|k| p[k] + delta * up[k]);
+                let (sq, _) = sphere_coords(q, EARTH_R);
+                assert!((sq[0] - s[0]).abs() < 1e-6 && (sq[1] - s[1]).abs() < 1e-6);
+                let fq = imp.eval(q, &mut None).f;
+                assert!(
+                    (fq - delta).abs() < 1e-5,
+                    "F {fq} at {delta} m (chop {chop})"
+                );
+                let fm = marching.eval(q, &mut None).f;
+                assert!(
+                    (fm - delta).abs() <= 0.1 * delta.abs() + 1e-6,
+                    "{fm} at {delta} m"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn prisms_hold_the_surface_over_their_triangles() {
+    let ocean = sea(1.0);
+    let origin = [0.0, 0.0];
+    let mesh = coarse_mesh(&ocean, origin);
+    let surface = ExactSurface::new(ocean.clone(), origin, EARTH_R).unwrap();
+    let prisms = prisms_of(&mesh, &surface);
+    let sampler = ocean.sampler(origin);
+    let mut rng = Rng::keyed(&[9]);
+    let mut tight = 0;
+    for (tri, prism) in mesh.indices().iter().zip(&prisms).step_by(37) {
+        let uv = tri.map(|v| mesh.uvs()[v as usize].map(f64::from));
+        for _ in 0..20 {
+            let (mut a, mut b) = (rng.f64(), rng.f64());
+            if a + b > 1.0 {
+                (a, b) = (1.0 - a, 1.0 - b);
+            }
+            let x: [f64; 2] = std::array::from_fn(|k| {
+                uv[0][k] + a * (uv[1][k] - uv[0][k]) + b * (uv[2][k] - uv[0][k])
+            });
+            let f = sampler.fields_f64(x[0], x[1]);
+            let v = [f[field::DX] as f64, f[field::H] as f64, f[field::DZ] as f64];
+            let p = crate::lod::curved_frame_position(x[0], x[1], v, EARTH_R);
+            for k in 0..3 {
+                assert!(
+                    prism.0[k] as f64 <= p[k] && p[k] <= prism.1[k] as f64,
+                    "{p:?} outside {prism:?}"
+                );
+            }
+        }
+        tight += usize::from(prism.1[1] - prism.0[1] < 2.0);
+    }
+    assert!(tight > 0, "every prism is taller than 2 m");
+}
+
+/// The first sign change of F along the ray by steps of `step` metres, narrowed by bisection in
+/// f64, up to `t_max`: the oracle.
+fn dense_march(surface: &ExactSurface, ray: &Ray, step: f64, t_max: f64) -> Option<f64> {
+    let imp = surface.implicit();
+    let o = ray.org.map(f64::from);
+    let d = ray.dir.map(f64::from);
+    let at = |t: f64| -> [f64; 3] { std::array::from_fn(|k| o[k] + t * d[k]) };
+    let f = |t: f64| imp.eval(at(t), &mut None).f;
+    let mut t = ray.tnear as f64;
+    let mut ft = f(t);
+    while t < t_max {
+        let tn = t + step;
+        let fnext = f(tn);
+        if (fnext > 0.0) != (ft > 0.0) {
+            let (mut a, mut b) = (t, tn);
+            for _ in 0..60 {
+                let m = 0.5 * (a + b);
+                if (f(m) > 0.0) == (ft > 0.0) {
+                    a = m;
+                } else {
+                    b = m;
+                }
+            }
+            return Some(0.5 * (a + b));
+        }
+        (t, ft) = (tn, fnext);
+    }
+    None
+}
+
+#[test]
+fn hits_agree_with_a_dense_march() {
+    let ocean = sea(1.0);
+    let origin = [0.0, 0.0];
+    let mesh = Arc::new(coarse_mesh(&ocean, origin));
+    let surface = ExactSurface::new(ocean.clone(), origin, EARTH_R).unwrap();
+    let exact = Exact::build(mesh, surface);
+    let imp = exact.surface().implicit();
+    let mut rng = Rng::keyed(&[11]);
+    let mut rays = Vec::new();
+    // camera rays, steep to grazing
+    for _ in 0..24 {
+        let el = -(3.5f64 + 60.0 * rng.f64().powi(3)).to_radians();
+        let az = std::f64::consts::TAU * rng.f64();
+        let d = [el.cos() * az.cos(), el.sin(), el.cos() * az.sin()];
+        rays.push(Ray::new([0.0, CAMERA_M as f32, 0.0], d.map(|c| c as f32)));
+    }
+    // rays rising at grazing angles from just above the surface (reflections that may meet
+    // the next wave) and from just below it (refractions, which meet it from the water side)
+    for k in 0..24 {
+        let x = [40.0 * rng.f64() - 20.0, 40.0 * rng.f64() - 20.0];
+        let f = imp.sampler.fields_f64(x[0], x[1]);
+        let v = [f[field::DX] as f64, f[field::H] as f64, f[field::DZ] as f64];
+        let p = crate::lod::curved_frame_position(x[0], x[1], v, EARTH_R);
+        let above = k % 2 == 0;
+        let el = (0.5 + 8.0 * rng.f64()).to_radians();
+        let az = std::f64::consts::TAU * rng.f64();
+        let o = [p[0], p[1] + if above { 0.02 } else { -0.02 }, p[2]];
+        let d = [el.cos() * az.cos(), el.sin(), el.cos() * az.sin()];
+        rays.push(Ray::new(o.map(|c| c as f32), d.map(|c| c as f32)));
+    }
+    let mut hits = 0;
+    for ray in &rays {
+        let want = dense_march(exact.surface(), ray, 0.002, 150.0);
+        let got = exact.intersect(ray).filter(|h| h.t < 150.0);
+        match (want, got) {
+            (None, None) => {}
+            (Some(w), Some(g)) => {
+                hits += 1;
+                assert!(
+                    (g.t as f64 - w).abs() <= 1e-4 * w.max(1.0),
+                    "t {} against the oracle's {w} on {ray:?}",
+                    g.t
+                );
+                // the hit names the nominal position of the surface point hit
+                let x = exact.interpolate_uv(&g).map(f64::from);
+                let p = ray.at(g.t).map(f64::from);
+                let e = imp.eval(p, &mut None);
+                assert!((e.x[0] - x[0]).abs() < 1e-2 && (e.x[1] - x[1]).abs() < 1e-2);
+            }
+            (w, g) => panic!("oracle {w:?}, exact {g:?} on {ray:?}"),
+        }
+    }
+    assert!(hits >= 36, "{hits} of {} rays hit", rays.len());
+}
