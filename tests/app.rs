@@ -129,6 +129,7 @@ fn tiny_compare_runs_end_to_end_and_writes_every_file() {
         rows_deg: (0.0, -5.0),
         max_boost: 16,
         filtered: true,
+        exact: false,
         out: dir.clone(),
         progress: false,
     };

@@ -58,6 +58,7 @@ fn compare(spp: u32, seed: u64, max_boost: u16) -> CompareSummary {
         rows_deg: (0.0, -5.0),
         max_boost,
         filtered: false,
+        exact: false,
         out: out.clone(),
         progress: false,
     };

@@ -106,6 +106,25 @@ mod cross {
     }
 }
 
+#[cfg(feature = "embree")]
+#[test]
+fn crosscheck_of_the_exact_surface_finds_no_disagreement() {
+    use vastocean::app::crosscheck::{CrosscheckJob, run};
+    let r = run(&CrosscheckJob {
+        lod: vastocean::config::LodChoice::PaperLow,
+        rays: 2000,
+        width: 16,
+        spp: 1,
+        seed: 5,
+        threads: 2,
+        surface: SurfaceKind::Exact,
+    })
+    .unwrap();
+    assert_eq!(r.rays.unexplained_disagreements, 0, "{r}");
+    assert!(r.rays.same_prim > 1000, "{r}");
+    assert!(r.rays.max_rel_dt <= 1e-4, "{r}");
+}
+
 fn small_scene(surface: SurfaceKind) -> SceneConfig {
     let mut cfg = SceneConfig::default();
     cfg.camera.width = 64;

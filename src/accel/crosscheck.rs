@@ -121,6 +121,68 @@ pub fn crosscheck(
     })
 }
 
+/// Relative difference in t within which two exact hits are the same crossing: the root
+/// finder's tolerance, reached from other warm starts (each backend searches from the prisms
+/// it meets first).
+pub const EXACT_T_TOLERANCE: f64 = 1e-4;
+
+/// As [`crosscheck`] for the exact displaced surface over the coarse `mesh`: Embree's user
+/// geometry against the Rust tree of prisms. Two hits agree when their t agree within
+/// [`EXACT_T_TOLERANCE`] (`same_prim` counts them: the prisms reporting one crossing may
+/// differ); every other difference is unexplained.
+pub fn crosscheck_exact(
+    mesh: Arc<Mesh>,
+    surface: impl Fn() -> crate::accel::exact::ExactSurface + Sync,
+    rays: &[Ray],
+    threads: usize,
+) -> Result<CrossReport, EmbreeError> {
+    use super::embree::ExactScene;
+    use super::exact::Exact;
+    let pool = super::tracing_pool(threads).expect("a rayon pool with a valid thread count");
+    let device = Device::new(threads)?;
+    let scene = pool
+        .install(|| ExactScene::new(&device, mesh.clone(), surface(), BuildOptions::default()))?;
+    let rust = pool.install(|| Exact::build(mesh.clone(), surface()));
+    let (embree_hits, embree_s) = pool.install(|| trace(&scene, rays));
+    let (rust_hits, rust_s) = pool.install(|| trace(&rust, rays));
+    let (mut same, mut both_miss, mut max_rel_dt) = (0, 0, 0.0f64);
+    for (e, r) in embree_hits.iter().zip(&rust_hits) {
+        match (e, r) {
+            (None, None) => both_miss += 1,
+            (Some(e), Some(r)) => {
+                let dt = (r.t as f64 - e.t as f64).abs() / (e.t as f64).abs().max(1e-3);
+                if dt <= EXACT_T_TOLERANCE {
+                    same += 1;
+                    max_rel_dt = max_rel_dt.max(dt);
+                }
+            }
+            _ => {}
+        }
+    }
+    let n = rays.len();
+    let unexplained = n - same - both_miss;
+    let mrays = |s: f64| if s > 0.0 { n as f64 / s / 1e6 } else { 0.0 };
+    Ok(CrossReport {
+        rays: n,
+        agree_fraction: if n == 0 {
+            1.0
+        } else {
+            (same + both_miss) as f64 / n as f64
+        },
+        same_prim: same,
+        both_miss,
+        disagreements: unexplained,
+        explained_disagreements: 0,
+        explained_by_rounding_only: 0,
+        unexplained_disagreements: unexplained,
+        max_rel_dt,
+        embree_mrays_per_s: mrays(embree_s),
+        rust_mrays_per_s: mrays(rust_s),
+        embree_build_s: scene.build_seconds(),
+        rust_build_s: rust.build_seconds(),
+    })
+}
+
 /// Closest hits of `rays` through `accel` in parallel chunks, and the seconds it took.
 pub fn trace(accel: &dyn Accel, rays: &[Ray]) -> (Vec<Option<Hit>>, f64) {
     let mut hits = vec![None; rays.len()];

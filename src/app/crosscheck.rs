@@ -9,9 +9,10 @@ use serde::Serialize;
 
 use super::AppError;
 use crate::accel::Ray;
-use crate::accel::crosscheck::{CrossReport, crosscheck, random_rays_over};
+use crate::accel::crosscheck::{CrossReport, crosscheck, crosscheck_exact, random_rays_over};
+use crate::accel::exact::ExactSurface;
 use crate::color::luminance;
-use crate::config::{Backend, LodChoice, Projection, SceneConfig};
+use crate::config::{Backend, LodChoice, Projection, SceneConfig, SurfaceKind};
 use crate::image_io::RgbImage;
 use crate::ocean::Surface;
 use crate::render::Camera;
@@ -28,6 +29,8 @@ pub struct CrosscheckJob {
     pub spp: u32,
     pub seed: u64,
     pub threads: usize,
+    /// The mesh's triangles, or the exact displaced surface inside them.
+    pub surface: SurfaceKind,
 }
 
 /// How two images of one scene differ.
@@ -69,6 +72,7 @@ pub struct CrosscheckReport {
     pub camera_rays: usize,
     #[serde(skip)]
     pub lod: LodChoice,
+    pub surface: SurfaceKind,
     #[serde(skip)]
     pub render_size: (usize, usize, u32),
     pub render_pixels: usize,
@@ -87,9 +91,10 @@ pub fn run(job: &CrosscheckJob) -> Result<CrosscheckReport, AppError> {
     cfg.render.spp = job.spp;
     cfg.render.seed = job.seed;
     cfg.render.threads = job.threads;
+    cfg.render.surface = job.surface;
     cfg.validate()?;
     let lod = crate::lod::params_for(&cfg.lod, &cfg.camera)?;
-    let ocean = Surface::new(&cfg.ocean, cfg.render.ocean_seed)?;
+    let ocean = Arc::new(Surface::new(&cfg.ocean, cfg.render.ocean_seed)?);
     let (mesh, _) = crate::lod::tessellate(&lod, &ocean.sampler(cfg.camera.position_m))?;
     let mut rays = random_rays_over(&mesh, job.rays, job.seed);
     let camera = Camera::new(Projection::Equirect { band_deg: None }, job.width, 2.0);
@@ -100,7 +105,16 @@ pub fn run(job: &CrosscheckJob) -> Result<CrosscheckReport, AppError> {
             rays.push(Ray::new(eye, d.to_array()));
         }
     }
-    let report = crosscheck(Arc::new(mesh), &rays, job.threads)?;
+    let report = match job.surface {
+        SurfaceKind::Mesh => crosscheck(Arc::new(mesh), &rays, job.threads)?,
+        SurfaceKind::Exact => {
+            let surface = || {
+                ExactSurface::new(ocean.clone(), cfg.camera.position_m, lod.earth_radius_m)
+                    .expect("a scene that validated has bilinear reads")
+            };
+            crosscheck_exact(Arc::new(mesh), surface, &rays, job.threads)?
+        }
+    };
 
     // The same small render through each backend, same seed: which pixels differ, and by how much.
     let mut images = Vec::new();
@@ -114,6 +128,7 @@ pub fn run(job: &CrosscheckJob) -> Result<CrosscheckReport, AppError> {
         rays: report,
         camera_rays: camera.width * camera.height,
         lod: job.lod,
+        surface: job.surface,
         render_size: (camera.width, camera.height, job.spp),
         render_pixels: d.pixels,
         render_differing_fraction: d.differing as f64 / d.pixels as f64,
@@ -128,13 +143,17 @@ impl fmt::Display for CrosscheckReport {
         let r = &self.rays;
         writeln!(
             f,
-            "crosscheck on {} ({} rays, {} of them camera rays):",
-            self.lod, r.rays, self.camera_rays
+            "crosscheck on {}, surface {} ({} rays, {} of them camera rays):",
+            self.lod, self.surface, r.rays, self.camera_rays
         )?;
         writeln!(
             f,
-            "  agree {:.6} (same triangle {}, both miss {}), disagreements {}: {} explained (edge/vertex or tie; {} of them by rounding at the ray's distance alone), {} unexplained",
+            "  agree {:.6} (same {} {}, both miss {}), disagreements {}: {} explained (edge/vertex or tie; {} of them by rounding at the ray's distance alone), {} unexplained",
             r.agree_fraction,
+            match self.surface {
+                SurfaceKind::Mesh => "triangle",
+                SurfaceKind::Exact => "crossing",
+            },
             r.same_prim,
             r.both_miss,
             r.disagreements,

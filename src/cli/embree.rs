@@ -32,6 +32,10 @@ pub struct CrosscheckArgs {
     /// Worker threads (0 = all cores).
     #[arg(long, default_value_t = 0, value_parser = super::threads_arg)]
     threads: usize,
+    /// What the rays meet: the mesh's triangles, or the exact displaced surface inside them
+    /// (Embree's user geometry against the Rust tree of prisms; docs/exact.md).
+    #[arg(long, value_parser = choice::<vastocean::config::SurfaceKind>(), default_value = "mesh")]
+    surface: vastocean::config::SurfaceKind,
     /// Print the result as one JSON object on stdout instead of the report.
     #[arg(long)]
     pub json: bool,
@@ -45,6 +49,7 @@ pub fn crosscheck(a: CrosscheckArgs) -> Result<()> {
         spp: a.spp,
         seed: a.seed,
         threads: a.threads,
+        surface: a.surface,
     };
     let r = app::crosscheck::run(&job)?;
     emit(&r, a.json)?;

@@ -347,6 +347,10 @@ pub struct CompareArgs {
     /// its statistics beside the paper's (docs/filtered.md).
     #[arg(long)]
     pub filtered: bool,
+    /// Also render the exact displaced surface inside the low tessellation's triangles, mapped
+    /// normals: scenario `low_exact`, with its statistics beside the paper's (docs/exact.md).
+    #[arg(long)]
+    pub exact: bool,
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
@@ -382,6 +386,7 @@ impl CompareArgs {
             rows_deg: self.rows,
             max_boost: self.max_boost,
             filtered: self.filtered,
+            exact: self.exact,
             out: self.out.clone(),
             progress: true,
         })

@@ -35,6 +35,10 @@ pub struct CompareJob {
     /// the noise floor; docs/filtered.md).
     #[serde(default)]
     pub filtered: bool,
+    /// Also render the low tessellation's exact displaced surface with mapped normals
+    /// (scenario `low_exact`, last; docs/exact.md).
+    #[serde(default)]
+    pub exact: bool,
     /// Output folder.
     pub out: PathBuf,
     /// Progress on stderr.
@@ -54,6 +58,9 @@ pub enum Scenario {
     NoiseFloor,
     /// Beyond the paper, with `--filtered`: the low tessellation with filtered normals.
     LowFiltered,
+    /// Beyond the paper, with `--exact`: the exact displaced surface inside the low
+    /// tessellation's triangles, mapped normals.
+    LowExact,
 }
 
 impl Scenario {
@@ -74,13 +81,17 @@ impl Scenario {
             Scenario::LowUnmapped => "low_unmapped",
             Scenario::NoiseFloor => "noise_floor",
             Scenario::LowFiltered => "low_filtered",
+            Scenario::LowExact => "low_exact",
         }
     }
 
     fn high(self) -> bool {
         !matches!(
             self,
-            Scenario::LowMapped | Scenario::LowUnmapped | Scenario::LowFiltered
+            Scenario::LowMapped
+                | Scenario::LowUnmapped
+                | Scenario::LowFiltered
+                | Scenario::LowExact
         )
     }
 
@@ -104,11 +115,14 @@ impl Scenario {
 
 impl CompareJob {
     /// The scenarios this job renders: the paper's four and the noise floor, then
-    /// `low_filtered` if asked for.
+    /// `low_filtered` and `low_exact` if asked for.
     pub fn scenarios(&self) -> Vec<Scenario> {
         let mut s = Scenario::ALL.to_vec();
         if self.filtered {
             s.push(Scenario::LowFiltered);
+        }
+        if self.exact {
+            s.push(Scenario::LowExact);
         }
         s
     }
@@ -155,6 +169,10 @@ pub struct CompareSummary {
     pub std_low_filtered: Option<f64>,
     pub std_low_filtered_corrected: Option<f64>,
     pub mean_low_filtered: Option<f64>,
+    /// With `--exact`: the same for `low_exact`.
+    pub std_low_exact: Option<f64>,
+    pub std_low_exact_corrected: Option<f64>,
+    pub mean_low_exact: Option<f64>,
     /// std(low unmapped) / std(low mapped) of the paper's statistic (the paper: 5 to 10 for
     /// its case 87).
     pub improvement_ratio: f64,
@@ -252,6 +270,9 @@ fn check(job: &CompareJob) -> Result<(), AppError> {
 /// not to warn.
 pub const BASELINE_NOISE_SHARE: f64 = 0.25;
 
+/// A scene prepared when its scenarios' turn comes (after the previous one is freed).
+type Later<'a> = Box<dyn FnOnce() -> Result<Prepared, crate::render::pipeline::RenderError> + 'a>;
+
 /// Renders every scenario, each tessellation prepared once, after the pilot that places the
 /// samples; returned in [`CompareJob::scenarios`] order, with how the samples were spent.
 fn render_scenarios(
@@ -323,14 +344,49 @@ fn render_scenarios(
         ..Samples::ALL
     };
     let mut out = Vec::new();
-    for (is_high, prepared, cfg, lod) in [
-        (true, high, &high_cfg, &job.high),
-        (false, low, &low_cfg, &job.low),
-    ] {
-        for sc in job.scenarios().into_iter().filter(|s| s.high() == is_high) {
+    let (ocean, sky) = (Arc::clone(&low.ocean), Arc::clone(&low.sky));
+    let mut exact_cfg = low_cfg.clone();
+    exact_cfg.render.surface = crate::config::SurfaceKind::Exact;
+    let exact = move || {
+        prepare_with(
+            &exact_cfg,
+            Setup {
+                ocean: Some(ocean),
+                sky: Some(sky),
+                progress: job.progress,
+                ..Setup::default()
+            },
+        )
+    };
+    let groups: [(bool, Later, &SceneConfig, &LodConfig); 3] = [
+        (true, Box::new(|| Ok(high)), &high_cfg, &job.high),
+        (false, Box::new(|| Ok(low)), &low_cfg, &job.low),
+        (false, Box::new(exact), &low_cfg, &job.low),
+    ];
+    for (k, (is_high, prepared, cfg, lod)) in groups.into_iter().enumerate() {
+        let exact = k == 2;
+        let wanted: Vec<Scenario> = job
+            .scenarios()
+            .into_iter()
+            .filter(|s| s.high() == is_high && (*s == Scenario::LowExact) == exact)
+            .collect();
+        if wanted.is_empty() {
+            continue;
+        }
+        if exact {
+            say(format!(
+                "exact surface in the low tessellation ({})",
+                lod.preset
+            ));
+        }
+        let prepared: Prepared = prepared()?;
+        for sc in wanted {
             let mut c = cfg.clone();
             c.render.normals = sc.normals();
             c.render.seed = cfg.render.seed.wrapping_add(sc.seed_offset());
+            if exact {
+                c.render.surface = crate::config::SurfaceKind::Exact;
+            }
             let (r, _) = prepared.render_samples(&c, MAX_BATCHES, samples, false, job.progress)?;
             let rep = &r.report;
             let info = ScenarioInfo {
@@ -431,6 +487,12 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
     plot::contact_sheet(&sheet_png, &images, &labels, exposure).map_err(plot_error(&sheet_png))?;
 
     let e = &estimates.scenarios;
+    // the optional scenarios' estimates, by name
+    let optional = |sc: Scenario| e.iter().find(|s| s.name == sc.name());
+    let (filtered, exact) = (
+        optional(Scenario::LowFiltered),
+        optional(Scenario::LowExact),
+    );
     // RMS over the analysed rows of the standard error of the baseline's pixel luminance.
     let rows = runs[0].1.camera.rows_between(job.rows_deg);
     let row_noise = runs[0].1.film.row_noise(&rows);
@@ -449,9 +511,12 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
         mean_low_mapped: e[1].mean.value,
         mean_low_unmapped: e[2].mean.value,
         mean_noise_floor: e[3].mean.value,
-        std_low_filtered: e.get(4).map(|s| s.std),
-        std_low_filtered_corrected: e.get(4).map(|s| s.std_corrected.value),
-        mean_low_filtered: e.get(4).map(|s| s.mean.value),
+        std_low_filtered: filtered.map(|s| s.std),
+        std_low_filtered_corrected: filtered.map(|s| s.std_corrected.value),
+        mean_low_filtered: filtered.map(|s| s.mean.value),
+        std_low_exact: exact.map(|s| s.std),
+        std_low_exact_corrected: exact.map(|s| s.std_corrected.value),
+        mean_low_exact: exact.map(|s| s.mean.value),
         improvement_ratio: improvement.plain,
         std_high_unmapped_corrected: e[0].std_corrected.value,
         std_low_mapped_corrected: e[1].std_corrected.value,

@@ -118,7 +118,10 @@ fn pool(job: &CompareJob, runs: Vec<(u64, CompareSummary)>, seconds: f64) -> Rea
                     low_mapped: v(1),
                     low_unmapped: v(2),
                     noise_floor: v(3),
-                    low_filtered: e.get(4).map(|f| f.variance_corrected.value),
+                    low_filtered: e
+                        .iter()
+                        .find(|f| f.name == super::Scenario::LowFiltered.name())
+                        .map(|f| f.variance_corrected.value),
                 },
                 summary: job
                     .out
@@ -231,6 +234,7 @@ mod tests {
             rows_deg: (0.0, -5.0),
             max_boost: 64,
             filtered: false,
+            exact: false,
             out: std::env::temp_dir().join("vastocean-realizations-refused"),
             progress: false,
         };

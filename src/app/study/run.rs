@@ -56,6 +56,7 @@ pub fn run_case(
         rows_deg: plan.rows_deg,
         max_boost: plan.max_boost,
         filtered: false,
+        exact: false,
         out: cdir,
         progress,
     };
