@@ -92,11 +92,15 @@ pub trait Accel: Send + Sync {
         Mesh::interpolate(m.uvs(), m.indices()[hit.prim as usize], hit.u, hit.v)
     }
     /// Whether hits lie on the displaced ocean itself ([`exact`]), not on the mesh's
-    /// triangles: the geometric normal at a hit is then the surface's own (the mapped normal),
-    /// a ray leaving a hit may meet the same prism again, and the mesh's slopes and heights
-    /// bound nothing.
+    /// triangles: a ray leaving a hit may meet the same prism again, and the mesh's slopes and
+    /// heights bound nothing.
     fn exact_surface(&self) -> bool {
         false
+    }
+    /// For [`Accel::exact_surface`] backends: the unit geometric normal of the surface at a
+    /// hit (the displaced surface's own tangent plane, air side up), in place of a triangle's.
+    fn surface_normal(&self, _hit: &Hit) -> Option<[f32; 3]> {
+        None
     }
     /// Short name for reports ("embree", "brute", ...).
     fn name(&self) -> &'static str;

@@ -190,6 +190,13 @@ fn frame_path(out: &Path, index: usize, ext: &str) -> PathBuf {
 /// JSON after them.
 pub fn run(job: &FramesJob) -> Result<SequenceReport, AppError> {
     job.scene.validate()?;
+    if job.scene.render.surface == crate::config::SurfaceKind::Exact {
+        // (its prisms and pyramids are built for one ocean time; a frame would need new ones)
+        return Err(AppError::input(
+            "--frames renders the mesh (render.surface = \"mesh\"); the exact surface renders \
+             one time at a time",
+        ));
+    }
     super::check_prefix(&job.out)?;
     let times = job.frames.times();
     let json = with_extension(&job.out, ".json");

@@ -102,8 +102,8 @@ impl SceneRef<'_> {
         c: &mut Counters,
     ) -> Scatter {
         let d = Vec3::from(ray.dir);
-        let sp = if self.accel.exact_surface() {
-            exact_surface_point(ray, hit, shading.normal)
+        let sp = if let Some(ng) = self.accel.surface_normal(hit) {
+            exact_surface_point(ray, hit, Vec3::from(ng))
         } else {
             surface_point(self.accel.mesh(), hit)
         };

@@ -55,7 +55,7 @@ pub(super) fn surface_point(mesh: &Mesh, hit: &Hit) -> SurfacePoint {
 }
 
 /// The surface at a hit on the exact displaced surface ([`crate::accel::exact`]): the point on
-/// the ray, the surface's own normal `normal` (the mapped one) as the geometric normal, and a
+/// the ray, the surface's own tangent plane's normal `normal` as the geometric normal, and a
 /// rounding bound that adds the root finder's distance from the surface to the point's.
 pub(super) fn exact_surface_point(ray: &Ray, hit: &Hit, normal: Vec3) -> SurfacePoint {
     let (o, d) = (Vec3::from(ray.org), Vec3::from(ray.dir));

@@ -221,6 +221,14 @@ impl Accel for ExactScene {
         true
     }
 
+    fn surface_normal(&self, hit: &Hit) -> Option<[f32; 3]> {
+        Some(
+            self.data
+                .surface
+                .normal_at(self.interpolate_uv(hit).map(f64::from)),
+        )
+    }
+
     fn rejected_rays(&self) -> u64 {
         self.rejected.load(Ordering::Relaxed)
     }

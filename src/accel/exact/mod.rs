@@ -192,6 +192,39 @@ impl ExactSurface {
         Some((t32, u as f32, v as f32))
     }
 
+    /// The unit normal of the displaced surface's own tangent plane at nominal position `x`
+    /// (air side up), by central differences of X over 1 mm: the bilinear blend of the heights
+    /// that the rays meet, where the mapped normal interpolates the layers' FFT derivatives
+    /// instead (the two differ by up to a few degrees between texels).
+    pub fn normal_at(&self, x: [f64; 2]) -> [f32; 3] {
+        const H: f64 = 1e-3;
+        let sampler = self.ocean.sampler(self.origin);
+        let at = |u: f64, v: f64| {
+            let f = sampler.fields_f64(u, v);
+            let d = [
+                f[crate::ocean::field::DX] as f64,
+                f[crate::ocean::field::H] as f64,
+                f[crate::ocean::field::DZ] as f64,
+            ];
+            crate::lod::curved_frame_position(u, v, d, self.earth_radius_m)
+        };
+        let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+        let dx = sub(at(x[0] + H, x[1]), at(x[0] - H, x[1]));
+        let dz = sub(at(x[0], x[1] + H), at(x[0], x[1] - H));
+        // dX/dz x dX/dx points up on a flat sea (as the ocean's normals)
+        let n = [
+            dz[1] * dx[2] - dz[2] * dx[1],
+            dz[2] * dx[0] - dz[0] * dx[2],
+            dz[0] * dx[1] - dz[1] * dx[0],
+        ];
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        if len > 0.0 && len.is_finite() {
+            n.map(|c| (c / len) as f32)
+        } else {
+            [0.0, 1.0, 0.0]
+        }
+    }
+
     /// Bytes of the bounds (the layers are the ocean's).
     pub fn bytes(&self) -> usize {
         self.bounds.bytes()
@@ -336,6 +369,12 @@ impl Accel for Exact {
     }
     fn exact_surface(&self) -> bool {
         true
+    }
+    fn surface_normal(&self, hit: &Hit) -> Option<[f32; 3]> {
+        Some(
+            self.surface
+                .normal_at(self.interpolate_uv(hit).map(f64::from)),
+        )
     }
     fn rejected_rays(&self) -> u64 {
         self.rejected.load(Ordering::Relaxed)
