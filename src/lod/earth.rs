@@ -14,6 +14,45 @@ pub fn horizon_distance(camera_height_m: f64, earth_radius_m: f64) -> f64 {
     r * ((2.0 * r * h + h * h).sqrt()).atan2(r)
 }
 
+/// The curved frame at nominal position (x, z): the sphere point at angle r / R about the
+/// nadir, and the local axes there (radial tangent, azimuthal tangent, up).
+struct Frame {
+    ux: f64,
+    uz: f64,
+    base: [f64; 3],
+    tr: [f64; 3],
+    ta: [f64; 3],
+    up: [f64; 3],
+}
+
+impl Frame {
+    #[inline]
+    fn at(x: f64, z: f64, earth_radius_m: f64) -> Frame {
+        let r = x.hypot(z);
+        let (ux, uz) = if r > 0.0 { (x / r, z / r) } else { (1.0, 0.0) };
+        let theta = r / earth_radius_m;
+        let (st, ct) = theta.sin_cos();
+        let half = (0.5 * theta).sin();
+        let drop = 2.0 * earth_radius_m * half * half;
+        Frame {
+            ux,
+            uz,
+            base: [earth_radius_m * st * ux, -drop, earth_radius_m * st * uz],
+            tr: [ct * ux, -st, ct * uz],
+            ta: [-uz, 0.0, ux],
+            up: [st * ux, ct, st * uz],
+        }
+    }
+
+    /// A flat-frame vector (x, y, z) in the local axes.
+    #[inline]
+    fn tilt(&self, v: [f64; 3]) -> [f64; 3] {
+        let radial = v[0] * self.ux + v[2] * self.uz;
+        let azim = -v[0] * self.uz + v[2] * self.ux;
+        std::array::from_fn(|i| radial * self.tr[i] + azim * self.ta[i] + v[1] * self.up[i])
+    }
+}
+
 /// Surface point X and unit normal of `sample` (taken at nominal camera-relative position
 /// (x, z)) in the camera frame: the nominal point moves onto the sphere at angle r / R about the
 /// nadir, and the flat-frame displacement (Dx, h, Dz) and normal are rotated by that tilt, so
@@ -25,48 +64,23 @@ pub fn curved_frame_point(
     sample: &Sample,
     earth_radius_m: f64,
 ) -> ([f64; 3], [f64; 3]) {
-    let r = x.hypot(z);
-    let (ux, uz) = if r > 0.0 { (x / r, z / r) } else { (1.0, 0.0) };
-    let theta = r / earth_radius_m;
-    let (st, ct) = theta.sin_cos();
-    let half = (0.5 * theta).sin();
-    let drop = 2.0 * earth_radius_m * half * half;
-    let base = [earth_radius_m * st * ux, -drop, earth_radius_m * st * uz];
-    // Local frame at the base point: radial tangent, azimuthal tangent, up.
-    let tr = [ct * ux, -st, ct * uz];
-    let ta = [-uz, 0.0, ux];
-    let up = [st * ux, ct, st * uz];
-    let tilt = |v: [f64; 3]| -> [f64; 3] {
-        let radial = v[0] * ux + v[2] * uz;
-        let azim = -v[0] * uz + v[2] * ux;
-        std::array::from_fn(|i| radial * tr[i] + azim * ta[i] + v[1] * up[i])
-    };
-    let d = tilt([
+    let f = Frame::at(x, z, earth_radius_m);
+    let d = f.tilt([
         sample.disp[0] as f64,
         sample.height as f64,
         sample.disp[1] as f64,
     ]);
-    let n = tilt(sample.normal.map(|c| c as f64));
-    (std::array::from_fn(|i| base[i] + d[i]), n)
+    let n = f.tilt(sample.normal.map(|c| c as f64));
+    (std::array::from_fn(|i| f.base[i] + d[i]), n)
 }
 
 /// The point of [`curved_frame_point`] alone, for a displacement `v` = (Dx, h, Dz) held in f64
 /// (the exact surface's root finder); the same arithmetic, so the same point.
 #[inline]
 pub fn curved_frame_position(x: f64, z: f64, v: [f64; 3], earth_radius_m: f64) -> [f64; 3] {
-    let r = x.hypot(z);
-    let (ux, uz) = if r > 0.0 { (x / r, z / r) } else { (1.0, 0.0) };
-    let theta = r / earth_radius_m;
-    let (st, ct) = theta.sin_cos();
-    let half = (0.5 * theta).sin();
-    let drop = 2.0 * earth_radius_m * half * half;
-    let base = [earth_radius_m * st * ux, -drop, earth_radius_m * st * uz];
-    let tr = [ct * ux, -st, ct * uz];
-    let ta = [-uz, 0.0, ux];
-    let up = [st * ux, ct, st * uz];
-    let radial = v[0] * ux + v[2] * uz;
-    let azim = -v[0] * uz + v[2] * ux;
-    std::array::from_fn(|i| base[i] + (radial * tr[i] + azim * ta[i] + v[1] * up[i]))
+    let f = Frame::at(x, z, earth_radius_m);
+    let d = f.tilt(v);
+    std::array::from_fn(|i| f.base[i] + d[i])
 }
 
 #[cfg(test)]

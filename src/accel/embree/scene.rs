@@ -31,6 +31,23 @@ pub struct Scene {
 unsafe impl Send for Scene {}
 unsafe impl Sync for Scene {}
 
+/// A new, empty scene on `device` (the caller releases it, and holds `device.building`).
+pub(super) fn new_scene(
+    device: &Device,
+    options: BuildOptions,
+    flags: u32,
+) -> Result<NonNull<c_void>, EmbreeError> {
+    // SAFETY: the device is live; the caller releases the scene.
+    let scene = unsafe { ffi::vo_scene_new(device.raw.as_ptr(), options.quality.raw(), flags) };
+    device.check("rtcNewScene")?;
+    NonNull::new(scene).ok_or(EmbreeError::Call {
+        call: "rtcNewScene",
+        code: 1,
+        name: error_name(1),
+        message: "no scene returned".into(),
+    })
+}
+
 impl Scene {
     /// Attaches `mesh`, builds the BVH and returns the committed scene.
     pub fn new(
@@ -56,15 +73,7 @@ impl Scene {
         } else {
             0
         };
-        // SAFETY: dev is live; the scene is released in Drop or on the error paths below.
-        let scene = unsafe { ffi::vo_scene_new(dev, options.quality.raw(), flags) };
-        device.check("rtcNewScene")?;
-        let scene = NonNull::new(scene).ok_or(EmbreeError::Call {
-            call: "rtcNewScene",
-            code: 1,
-            name: error_name(1),
-            message: "no scene returned".into(),
-        })?;
+        let scene = new_scene(device, options, flags)?;
         let release = |e| {
             // SAFETY: scene is live and not yet owned by a Scene value.
             unsafe { ffi::vo_scene_release(scene.as_ptr()) };

@@ -119,15 +119,8 @@ impl ExactScene {
         });
         let dev = device.raw.as_ptr();
         let _building = device.building.lock().unwrap_or_else(|e| e.into_inner());
-        // SAFETY: dev is live; the scene is released in Drop or on the error paths below.
-        let scene = unsafe { ffi::vo_scene_new(dev, options.quality.raw(), 0) };
-        device.check("rtcNewScene")?;
-        let scene = NonNull::new(scene).ok_or(EmbreeError::Call {
-            call: "rtcNewScene",
-            code: 1,
-            name: error_name(1),
-            message: "no scene returned".into(),
-        })?;
+        // released in Drop or on the error paths below
+        let scene = super::scene::new_scene(device, options, 0)?;
         let release = |e| {
             // SAFETY: scene is live and not yet owned by an ExactScene value.
             unsafe { ffi::vo_scene_release(scene.as_ptr()) };
