@@ -167,3 +167,31 @@ fn exact_surface_refuses_vertex_normals_and_bicubic_reads() {
     let e = cfg.validate().unwrap_err().to_string();
     assert!(e.contains("ocean.interp"), "{e}");
 }
+
+#[test]
+fn compare_refuses_an_exact_scene_and_checks_its_exact_scenario_before_any_work() {
+    use vastocean::app::compare::{CompareJob, run};
+    let out = std::env::temp_dir().join("vastocean-exact-compare-refused");
+    let job = |scene: SceneConfig, exact: bool| CompareJob {
+        scene,
+        high: Default::default(),
+        low: Default::default(),
+        rows_deg: (0.0, -5.0),
+        max_boost: 1,
+        filtered: false,
+        exact,
+        out: out.clone(),
+        progress: false,
+    };
+    // the paper's scenarios are meshes: an exact scene is refused, pointing to --exact
+    let e = run(&job(small_scene(SurfaceKind::Exact), false)).unwrap_err();
+    assert_eq!(e.exit_code(), 2, "{e}");
+    assert!(e.to_string().contains("--exact"), "{e}");
+    // --exact with reads the exact surface cannot bound: refused before anything renders
+    let mut scene = small_scene(SurfaceKind::Mesh);
+    scene.ocean.interp = vastocean::ocean::Interp::Bicubic;
+    let e = run(&job(scene, true)).unwrap_err();
+    assert_eq!(e.exit_code(), 2, "{e}");
+    assert!(e.to_string().contains("ocean.interp"), "{e}");
+    assert!(!out.join("summary.json").exists());
+}

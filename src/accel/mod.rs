@@ -98,8 +98,9 @@ pub trait Accel: Send + Sync {
         false
     }
     /// For [`Accel::exact_surface`] backends: the unit geometric normal of the surface at a
-    /// hit (the displaced surface's own tangent plane, air side up), in place of a triangle's.
-    fn surface_normal(&self, _hit: &Hit) -> Option<[f32; 3]> {
+    /// hit (the displaced surface's own tangent plane, air side up), in place of a triangle's,
+    /// and how far from the surface the hit point may lie beyond its f32 rounding, m.
+    fn surface_normal(&self, _hit: &Hit) -> Option<([f32; 3], f32)> {
         None
     }
     /// Short name for reports ("embree", "brute", ...).

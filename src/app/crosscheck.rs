@@ -163,7 +163,11 @@ impl fmt::Display for CrosscheckReport {
         )?;
         writeln!(
             f,
-            "  max relative t difference on agreeing hits, times |cos incidence| {:.2e}",
+            "  max relative t difference on agreeing hits{} {:.2e}",
+            match self.surface {
+                SurfaceKind::Mesh => ", times |cos incidence|",
+                SurfaceKind::Exact => "",
+            },
             r.max_rel_dt
         )?;
         writeln!(

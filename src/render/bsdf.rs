@@ -102,8 +102,8 @@ impl SceneRef<'_> {
         c: &mut Counters,
     ) -> Scatter {
         let d = Vec3::from(ray.dir);
-        let sp = if let Some(ng) = self.accel.surface_normal(hit) {
-            exact_surface_point(ray, hit, Vec3::from(ng))
+        let sp = if let Some((ng, error_m)) = self.accel.surface_normal(hit) {
+            exact_surface_point(ray, hit, Vec3::from(ng), error_m)
         } else {
             surface_point(self.accel.mesh(), hit)
         };

@@ -56,12 +56,16 @@ pub(super) fn surface_point(mesh: &Mesh, hit: &Hit) -> SurfacePoint {
 
 /// The surface at a hit on the exact displaced surface ([`crate::accel::exact`]): the point on
 /// the ray, the surface's own tangent plane's normal `normal` as the geometric normal, and a
-/// rounding bound that adds the root finder's distance from the surface to the point's.
-pub(super) fn exact_surface_point(ray: &Ray, hit: &Hit, normal: Vec3) -> SurfacePoint {
+/// rounding bound that adds the root finder's distance from the surface, `root_error_m`.
+pub(super) fn exact_surface_point(
+    ray: &Ray,
+    hit: &Hit,
+    normal: Vec3,
+    root_error_m: f32,
+) -> SurfacePoint {
     let (o, d) = (Vec3::from(ray.org), Vec3::from(ray.dir));
     let p = o + hit.t * d;
-    let err = fp::gamma(3.0) * (o.abs() + (hit.t * d).abs())
-        + Vec3::splat(crate::accel::exact::ROOT_ERROR_M);
+    let err = fp::gamma(3.0) * (o.abs() + (hit.t * d).abs()) + Vec3::splat(root_error_m);
     SurfacePoint {
         p,
         ng: normal.normalize_or(Vec3::Y),

@@ -222,14 +222,19 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
     let (accel, seconds_build, embree_version): (Box<dyn Accel>, f64, Option<String>) =
         match cfg.render.backend {
             _ if exact => {
-                let surface =
-                    ExactSurface::new(ocean.clone(), cfg.camera.position_m, lod.earth_radius_m)
-                        .map_err(RenderError::Exact)?;
+                // the pyramids are part of the build (on the scene's threads)
+                let t = Instant::now();
+                let surface = pool
+                    .install(|| {
+                        ExactSurface::new(ocean.clone(), cfg.camera.position_m, lod.earth_radius_m)
+                    })
+                    .map_err(RenderError::Exact)?;
+                let pyramids_s = t.elapsed().as_secs_f64();
                 match cfg.render.backend {
                     Backend::Rust => {
                         let exact = pool.install(|| Exact::build(mesh, surface));
                         skip_above_y = Some(exact.top_y());
-                        let s = exact.build_seconds();
+                        let s = pyramids_s + exact.build_seconds();
                         (Box::new(exact), s, None)
                     }
                     #[cfg(not(feature = "embree"))]
@@ -241,7 +246,7 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
                             ExactScene::new(&device, mesh, surface, BuildOptions::default())
                         })?;
                         skip_above_y = Some(exact.top_y());
-                        let s = exact.build_seconds();
+                        let s = pyramids_s + exact.build_seconds();
                         (Box::new(exact), s, Some(device.version()))
                     }
                 }

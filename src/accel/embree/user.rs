@@ -214,12 +214,10 @@ impl Accel for ExactScene {
         true
     }
 
-    fn surface_normal(&self, hit: &Hit) -> Option<[f32; 3]> {
-        Some(
-            self.data
-                .surface
-                .normal_at(self.interpolate_uv(hit).map(f64::from)),
-        )
+    fn surface_normal(&self, hit: &Hit) -> Option<([f32; 3], f32)> {
+        let s = &self.data.surface;
+        let n = s.normal_at(self.interpolate_uv(hit).map(f64::from));
+        Some((n, s.hit_error_m()))
     }
 
     fn rejected_rays(&self) -> u64 {

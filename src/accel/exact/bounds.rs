@@ -191,14 +191,16 @@ impl SurfaceBounds {
     /// The smallest and largest summed h over nominal positions `[x0, x1] x [z0, z1]`, m.
     #[inline]
     pub fn height(&self, x0: f64, x1: f64, z0: f64, z1: f64) -> [f64; 2] {
-        let mut b = [0.0f64; 2];
+        let (mut b, mut size) = ([0.0f64; 2], 1e-3);
         for p in &self.pyramids {
             let q = p.query(x0, x1, z0, z1);
             b[0] += q[0] as f64;
             b[1] += q[1] as f64;
+            size += (q[0].abs().max(q[1].abs())) as f64;
         }
-        // f32 texels summed in f32 by the reads: a read can round past the exact sum
-        let slack = 1e-6 * (b[0].abs().max(b[1].abs()) + 1e-3);
+        // f32 texels blended and summed in f32 by the reads: a read can round past the exact
+        // sum by a few ulps of each layer's value (layers can cancel, so not of the sum's)
+        let slack = 1e-6 * size;
         [b[0] - slack, b[1] + slack]
     }
 

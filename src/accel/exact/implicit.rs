@@ -14,11 +14,11 @@
 use crate::lod::curved_frame_position;
 use crate::ocean::{Sampler, field};
 
-/// Newton steps before an inversion gives up (it then answers with the last point reached,
-/// whose residual is below the shift of one step).
-const MAX_NEWTON: usize = 12;
+/// Newton steps before an inversion gives up (it then answers with the last point reached and
+/// says it did not converge: near a fold the fixed-point fallback converges slowly).
+const MAX_NEWTON: usize = 24;
 /// Residual in arc position at which an inversion stops, m.
-const TOL_S: f64 = 1e-7;
+pub(super) const TOL_S: f64 = 1e-7;
 
 /// Arc position s and altitude a of the point `p` over a sphere of radius `r` centred at
 /// (0, -r, 0). The altitude is computed as (|P - C|^2 - r^2) / (|P - C| + r), free of the
@@ -52,6 +52,8 @@ pub(super) struct Warm {
 pub(super) struct Eval {
     pub f: f64,
     pub x: [f64; 2],
+    /// The inversion reached its tolerance (else F is the last step's, of unknown error).
+    pub converged: bool,
 }
 
 /// The implicit surface around one camera origin.
@@ -86,12 +88,14 @@ impl Implicit<'_> {
             None => s,
         };
         let mut alt = 0.0;
+        let mut converged = false;
         for k in 0..=MAX_NEWTON {
             let (f, sq, aq) = self.surface(x);
             alt = aq;
             let r = [s[0] - sq[0], s[1] - sq[1]];
             let res = r[0].abs() + r[1].abs();
-            if k == MAX_NEWTON || res <= TOL_S || res * self.lip <= 0.1 * (a - aq).abs() {
+            converged = res <= TOL_S || res * self.lip <= 0.1 * (a - aq).abs();
+            if converged || k == MAX_NEWTON {
                 break;
             }
             let (a11, b, a22) = (
@@ -110,6 +114,10 @@ impl Implicit<'_> {
             }
         }
         *warm = Some(Warm { s, x });
-        Eval { f: a - alt, x }
+        Eval {
+            f: a - alt,
+            x,
+            converged,
+        }
     }
 }

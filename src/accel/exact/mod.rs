@@ -32,11 +32,6 @@ use crate::ocean::{Interp, Surface};
 use bounds::SurfaceBounds;
 use implicit::Implicit;
 
-/// How far an exact hit point may lie from the surface along the normal, m, beyond its f32
-/// rounding: the root finder's tolerance on F with room. The integrator offsets the rays that
-/// leave an exact hit by this much more than a triangle hit's.
-pub const ROOT_ERROR_M: f32 = 4.0 * search::TOL_F as f32;
-
 /// The displaced surface of an ocean around one camera origin, with the bounds the intersector
 /// needs.
 pub struct ExactSurface {
@@ -103,6 +98,16 @@ impl ExactSurface {
             earth_radius_m: self.earth_radius_m,
             lip: self.slope.map_or(f64::INFINITY, |s| 1.0 + s),
         }
+    }
+
+    /// How far an exact hit point may lie from the surface, m, beyond its f32 rounding: the
+    /// root's tolerance on F, what the inversion's residual can add to it (the slope bound,
+    /// or 10 without one, times its tolerance), and the f32 rounding of the summed heights;
+    /// doubled for room. The integrator offsets rays leaving an exact hit by this much more
+    /// than a triangle hit's.
+    pub fn hit_error_m(&self) -> f32 {
+        let lip = 1.0 + self.slope.unwrap_or(10.0);
+        (2.0 * (search::TOL_F + lip * implicit::TOL_S + 1e-6 * self.bounds.height_limit())) as f32
     }
 
     /// The slope bound the march uses, if any.
@@ -370,11 +375,11 @@ impl Accel for Exact {
     fn exact_surface(&self) -> bool {
         true
     }
-    fn surface_normal(&self, hit: &Hit) -> Option<[f32; 3]> {
-        Some(
-            self.surface
-                .normal_at(self.interpolate_uv(hit).map(f64::from)),
-        )
+    fn surface_normal(&self, hit: &Hit) -> Option<([f32; 3], f32)> {
+        let n = self
+            .surface
+            .normal_at(self.interpolate_uv(hit).map(f64::from));
+        Some((n, self.surface.hit_error_m()))
     }
     fn rejected_rays(&self) -> u64 {
         self.rejected.load(Ordering::Relaxed)

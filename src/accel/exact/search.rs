@@ -17,8 +17,8 @@
 use super::ExactSurface;
 use super::implicit::{Eval, Implicit, Warm, sphere_coords};
 
-/// |F| at which a root is accepted, m: the error the hit point carries into the integrator's
-/// offset of the next ray's origin ([`super::ROOT_ERROR_M`] covers it).
+/// |F| at which a root is accepted, m: part of the error the hit point carries into the
+/// integrator's offset of the next ray's origin ([`super::ExactSurface::hit_error_m`]).
 pub(super) const TOL_F: f64 = 2e-7;
 /// Most halvings of one ray's segment before it is marched whatever its length.
 const MAX_DEPTH: u32 = 40;
@@ -58,6 +58,11 @@ impl RayPath<'_> {
     fn eval(&mut self, t: f64) -> Eval {
         self.imp.eval(self.at(t), &mut self.warm)
     }
+    /// [`Self::eval`] with the inversion started from the point's own arc position.
+    fn eval_cold(&mut self, t: f64) -> Eval {
+        self.warm = None;
+        self.eval(t)
+    }
 }
 
 impl ExactSurface {
@@ -87,17 +92,21 @@ impl ExactSurface {
         };
         // the side the ray is on where its search starts, known after the first evaluation
         let mut side: Option<(f64, Eval)> = None;
-        let mut stack: Vec<(End, End, u32)> = Vec::with_capacity(2 * MAX_DEPTH as usize);
-        stack.push((ray.end(t0), ray.end(t1), 0));
-        while let Some((a, b, depth)) = stack.pop() {
+        // depth first, nearer half on top: at most one entry per level waits, plus the top
+        let mut stack = [(ray.end(t0), ray.end(t1), 0u32); MAX_DEPTH as usize + 2];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let (a, b, depth) = stack[sp];
             if self.clears(&ray, &a, &b) {
                 continue;
             }
             let ds = (b.s[0] - a.s[0]).hypot(b.s[1] - a.s[1]);
             if ds > self.split_m && depth < MAX_DEPTH {
                 let m = ray.end(0.5 * (a.t + b.t));
-                stack.push((m, b, depth + 1));
-                stack.push((a, m, depth + 1));
+                stack[sp] = (m, b, depth + 1);
+                stack[sp + 1] = (a, m, depth + 1);
+                sp += 2;
                 continue;
             }
             let (t_prev, e_prev) = match side {
@@ -107,7 +116,8 @@ impl ExactSurface {
             if e_prev.f == 0.0 {
                 return Some((t_prev, e_prev.x));
             }
-            match self.march(&mut ray, t_prev, e_prev, b.t) {
+            let theta = a.s[0].hypot(a.s[1]).max(b.s[0].hypot(b.s[1])) / r;
+            match self.march(&mut ray, t_prev, e_prev, b.t, theta) {
                 Ok(hit) => return Some(hit),
                 // no crossing up to b: the next segment starts on the same side
                 Err(at_b) => side = Some((b.t, at_b)),
@@ -122,9 +132,14 @@ impl ExactSurface {
     fn clears(&self, ray: &RayPath, a: &End, b: &End) -> bool {
         let len = (b.t - a.t) * ray.len;
         let far = a.s[0].hypot(a.s[1]).max(b.s[0].hypot(b.s[1])) + len;
-        // how far the arc positions of a straight segment stray from their chord, with room
-        let slack = 1e-4 + len * len * far / (self.earth_radius_m * self.earth_radius_m);
+        let theta = far / self.earth_radius_m;
         let [dx, dz] = self.disp;
+        // how far the arc positions of a straight segment stray from their chord, with room,
+        // and how much the sphere stretches a displacement azimuthally (theta / sin theta - 1
+        // < theta^2 / 5 below a radian)
+        let slack = 1e-4
+            + len * len * far / (self.earth_radius_m * self.earth_radius_m)
+            + dx.max(dz) * theta * theta;
         let x0 = a.s[0].min(b.s[0]) - slack - dx;
         let x1 = a.s[0].max(b.s[0]) + slack + dx;
         let z0 = a.s[1].min(b.s[1]) - slack - dz;
@@ -143,27 +158,38 @@ impl ExactSurface {
         ray_lo > hi
     }
 
-    /// Marches from `t` (where F is `e`) to `t_end`: the first crossing, or F at `t_end`.
+    /// Marches from `t` (where F is `e`) to `t_end`, at most `theta` radians from the nadir:
+    /// the first crossing, or F at `t_end`.
     fn march(
         &self,
         ray: &mut RayPath,
         mut t: f64,
         mut e: Eval,
         t_end: f64,
+        theta: f64,
     ) -> Result<(f64, [f64; 2]), Eval> {
         let floor = self.floor_m / ray.len;
-        // |dF/dt| <= |da/dt| + slope |ds/dt|; within 60 km of the nadir (tilt under 0.01 rad)
-        // the altitude and arc position move with the ray's vertical and horizontal parts,
-        // each leaking at most 1 % into the other
+        // |dF/dt| <= |da/dt| + slope |ds/dt|: the altitude and the arc position move with the
+        // ray's vertical and horizontal parts, each leaking into the other by the tilt from
+        // the nadir (sin theta, with room for the segment's own reach)
         let (dv, dh) = (ray.d[1].abs(), ray.d[0].hypot(ray.d[2]));
+        let leak = 1.01 * theta + 1e-3;
         let k = self
             .slope
-            .map(|s| 1.01 * (dv + 0.01 * dh + s * (dh + 0.01 * dv)) + 1e-9);
+            .map(|s| 1.01 * (dv + leak * dh + s * (dh + leak * dv)) + 1e-9);
         while t < t_end {
-            // (F is known to a tenth of itself while it is far from zero)
-            let certified = k.map_or(0.0, |k| 0.9 * e.f.abs() / k);
+            // (F is known to a tenth of itself while it is far from zero; an inversion that did
+            // not converge certifies nothing)
+            let certified = match k {
+                Some(k) if e.converged => 0.9 * e.f.abs() / k,
+                _ => 0.0,
+            };
             let tn = (t + certified.max(floor)).min(t_end);
-            let en = ray.eval(tn);
+            let mut en = ray.eval(tn);
+            if !en.converged {
+                // once more from scratch: a warm start across a steep patch can stall
+                en = ray.eval_cold(tn);
+            }
             if (en.f > 0.0) != (e.f > 0.0) || en.f == 0.0 {
                 return Ok(self.root(ray, (t, e), (tn, en)));
             }

@@ -15,7 +15,7 @@ use crate::analysis::error::{
     EstimateError, Estimates, Estimator, Inputs, Interval, MIN_BATCHES, RatioEstimate,
 };
 use crate::analysis::plot;
-use crate::config::{LodConfig, NormalMode, Projection, SceneConfig};
+use crate::config::{LodConfig, NormalMode, Projection, SceneConfig, SurfaceKind};
 use crate::image_io::{png_exposure, write_exr_with, write_json, write_png};
 use crate::render::film::{MAX_BATCHES, Samples};
 use crate::render::pipeline::{Prepared, Rendered, Setup, prepare_with};
@@ -225,13 +225,30 @@ fn with_lod(scene: &SceneConfig, lod: &LodConfig) -> SceneConfig {
     }
 }
 
+/// The scene of scenario `low_exact`: the low tessellation's exact surface, mapped normals.
+fn exact_scene(job: &CompareJob) -> SceneConfig {
+    let mut c = with_lod(&job.scene, &job.low);
+    c.render.surface = SurfaceKind::Exact;
+    c.render.normals = NormalMode::Mapped;
+    c
+}
+
 /// Checks everything that can be checked before any work: the scene with each tessellation,
 /// the camera, and that the analysed rows lie inside the rendered band.
 fn check(job: &CompareJob) -> Result<(), AppError> {
+    if job.scene.render.surface != SurfaceKind::Mesh {
+        return Err(AppError::input(
+            "compare renders the paper's scenarios on the mesh (render.surface = \"mesh\", \
+             --surface mesh); --exact adds the exact surface as scenario low_exact",
+        ));
+    }
     for lod in [&job.high, &job.low] {
         let scene = with_lod(&job.scene, lod);
         scene.validate()?;
         crate::lod::params_for(&scene.lod, &scene.camera)?;
+    }
+    if job.exact {
+        exact_scene(job).validate()?;
     }
     let spp = job.scene.render.spp;
     if (spp as usize) < MIN_BATCHES || !(spp as usize).is_multiple_of(MIN_BATCHES) {
@@ -345,9 +362,8 @@ fn render_scenarios(
     };
     let mut out = Vec::new();
     let (ocean, sky) = (Arc::clone(&low.ocean), Arc::clone(&low.sky));
-    let mut exact_cfg = low_cfg.clone();
-    exact_cfg.render.surface = crate::config::SurfaceKind::Exact;
-    let exact = move || {
+    let exact_cfg = exact_scene(job);
+    let exact = || {
         prepare_with(
             &exact_cfg,
             Setup {
@@ -361,7 +377,7 @@ fn render_scenarios(
     let groups: [(bool, Later, &SceneConfig, &LodConfig); 3] = [
         (true, Box::new(|| Ok(high)), &high_cfg, &job.high),
         (false, Box::new(|| Ok(low)), &low_cfg, &job.low),
-        (false, Box::new(exact), &low_cfg, &job.low),
+        (false, Box::new(exact), &exact_cfg, &job.low),
     ];
     for (k, (is_high, prepared, cfg, lod)) in groups.into_iter().enumerate() {
         let exact = k == 2;
@@ -384,9 +400,6 @@ fn render_scenarios(
             let mut c = cfg.clone();
             c.render.normals = sc.normals();
             c.render.seed = cfg.render.seed.wrapping_add(sc.seed_offset());
-            if exact {
-                c.render.surface = crate::config::SurfaceKind::Exact;
-            }
             let (r, _) = prepared.render_samples(&c, MAX_BATCHES, samples, false, job.progress)?;
             let rep = &r.report;
             let info = ScenarioInfo {

@@ -38,6 +38,9 @@ pub struct Variances {
     /// With `--filtered`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub low_filtered: Option<f64>,
+    /// With `--exact`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub low_exact: Option<f64>,
 }
 
 /// `summary.json` of a comparison over realizations. JSON has no infinity: an unbounded
@@ -67,6 +70,9 @@ pub struct RealizationsSummary {
     /// With `--filtered`: the low tessellation with filtered normals, pooled the same way.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub std_low_filtered_corrected: Option<Interval>,
+    /// With `--exact`: the exact surface in the low tessellation, pooled the same way.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub std_low_exact_corrected: Option<Interval>,
     pub rows_deg: (f64, f64),
     pub spp: u32,
     pub seconds_total: f64,
@@ -109,6 +115,11 @@ fn pool(job: &CompareJob, runs: Vec<(u64, CompareSummary)>, seconds: f64) -> Rea
         .map(|(seed, s)| {
             let e = &s.estimates.scenarios;
             let v = |i: usize| e[i].variance_corrected.value;
+            let named = |sc: super::Scenario| {
+                e.iter()
+                    .find(|f| f.name == sc.name())
+                    .map(|f| f.variance_corrected.value)
+            };
             Realization {
                 ocean_seed: *seed,
                 improvement_ratio: s.improvement.corrected,
@@ -118,10 +129,8 @@ fn pool(job: &CompareJob, runs: Vec<(u64, CompareSummary)>, seconds: f64) -> Rea
                     low_mapped: v(1),
                     low_unmapped: v(2),
                     noise_floor: v(3),
-                    low_filtered: e
-                        .iter()
-                        .find(|f| f.name == super::Scenario::LowFiltered.name())
-                        .map(|f| f.variance_corrected.value),
+                    low_filtered: named(super::Scenario::LowFiltered),
+                    low_exact: named(super::Scenario::LowExact),
                 },
                 summary: job
                     .out
@@ -135,6 +144,13 @@ fn pool(job: &CompareJob, runs: Vec<(u64, CompareSummary)>, seconds: f64) -> Rea
             .iter()
             .map(|r| f(&r.variance_corrected))
             .collect()
+    };
+    let optional = |f: fn(&Variances) -> Option<f64>| {
+        realizations
+            .iter()
+            .map(|r| f(&r.variance_corrected))
+            .collect::<Option<Vec<f64>>>()
+            .map(|v| pooled_std(&v))
     };
     let mut each: Vec<f64> = realizations
         .iter()
@@ -153,11 +169,8 @@ fn pool(job: &CompareJob, runs: Vec<(u64, CompareSummary)>, seconds: f64) -> Rea
         std_low_mapped_corrected: pooled_std(&column(|v| v.low_mapped)),
         std_low_unmapped_corrected: pooled_std(&column(|v| v.low_unmapped)),
         std_noise_floor_corrected: pooled_std(&column(|v| v.noise_floor)),
-        std_low_filtered_corrected: realizations
-            .iter()
-            .map(|r| r.variance_corrected.low_filtered)
-            .collect::<Option<Vec<f64>>>()
-            .map(|v| pooled_std(&v)),
+        std_low_filtered_corrected: optional(|v| v.low_filtered),
+        std_low_exact_corrected: optional(|v| v.low_exact),
         realizations,
         rows_deg: job.rows_deg,
         spp: job.scene.render.spp,
@@ -199,6 +212,9 @@ impl fmt::Display for RealizationsSummary {
         )?;
         if let Some(filtered) = &self.std_low_filtered_corrected {
             writeln!(f, "  low filtered {}", std(filtered))?;
+        }
+        if let Some(exact) = &self.std_low_exact_corrected {
+            writeln!(f, "  low exact {}", std(exact))?;
         }
         let pooled = Interval {
             value: self.improvement_ratio_corrected,
