@@ -49,17 +49,48 @@ pub(crate) fn draw_png(
     write_png_rgb8(path, size.0, size.1, &buf).map_err(|e| e.to_string())
 }
 
-/// Scenario curves in the order of the estimates (high unmapped, low mapped, low unmapped,
-/// noise floor): the paper's Figure 5 colours.
-const CURVES: [(&str, RGBColor); 4] = [
-    ("high tessellation, unmapped", RGBColor(0, 160, 60)),
-    ("low tessellation, mapped", RGBColor(30, 80, 220)),
-    ("low tessellation, unmapped", RGBColor(225, 180, 0)),
+/// Each scenario's curve, by its name: the paper's Figure 5 colours for its scenarios, and
+/// the optional ones beside them.
+const CURVES: [(&str, &str, RGBColor); 6] = [
     (
+        "high_unmapped",
+        "high tessellation, unmapped",
+        RGBColor(0, 160, 60),
+    ),
+    (
+        "low_mapped",
+        "low tessellation, mapped",
+        RGBColor(30, 80, 220),
+    ),
+    (
+        "low_unmapped",
+        "low tessellation, unmapped",
+        RGBColor(225, 180, 0),
+    ),
+    (
+        "noise_floor",
         "noise floor (baseline, other seed)",
         RGBColor(150, 150, 150),
     ),
+    (
+        "low_filtered",
+        "low tessellation, filtered",
+        RGBColor(150, 60, 200),
+    ),
+    (
+        "low_exact",
+        "low tessellation, exact surface",
+        RGBColor(220, 40, 40),
+    ),
 ];
+
+/// The label and colour of scenario `name` (a scenario the table lacks: its name, in black).
+fn curve(name: &str) -> (String, RGBColor) {
+    CURVES
+        .iter()
+        .find(|c| c.0 == name)
+        .map_or((name.to_string(), BLACK), |c| (c.1.to_string(), c.2))
+}
 
 /// Two panels against elevation: the mean of Y(scenario) - Y(baseline), and its standard
 /// deviation: noise-corrected (solid) inside its 95 % interval (shaded), and the paper's
@@ -124,7 +155,8 @@ pub fn stats_plot(
                 .axis_desc_style(("sans-serif", 16))
                 .draw()
                 .map_err(e)?;
-            for (sc, (label, color)) in scenarios.iter().zip(CURVES) {
+            for sc in scenarios {
+                let (label, color) = curve(&sc.name);
                 let rows = &sc.rows;
                 if pick == 1 {
                     let band: Vec<(f64, f64)> = rows
