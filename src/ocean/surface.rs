@@ -281,11 +281,6 @@ impl Sampler<'_> {
     pub fn layers(&self) -> &[Layer] {
         self.layers
     }
-
-    /// The interpolation the reads use.
-    pub fn interp(&self) -> Interp {
-        self.interp
-    }
 }
 
 /// Every layer's fields at time `t`, one layer after another, each on every core, in one set of

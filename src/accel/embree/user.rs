@@ -11,7 +11,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use super::{BuildOptions, Device, EmbreeError, error_name, ffi};
-use crate::accel::exact::{ExactSurface, Searched, prisms_of};
+use crate::accel::exact::{ExactSurface, Searched, prisms_of, top_of};
 use crate::accel::{Accel, Hit, Ray};
 use crate::mesh::Mesh;
 
@@ -102,10 +102,7 @@ impl ExactScene {
         }
         let start = Instant::now();
         let prisms = prisms_of(&mesh, &surface);
-        let top_y = prisms
-            .iter()
-            .map(|p| p.1[1])
-            .fold(f32::NEG_INFINITY, f32::max);
+        let top_y = top_of(&prisms);
         let count = prisms.len();
         let data = Box::new(Prisms {
             surface,

@@ -110,11 +110,6 @@ impl ExactSurface {
         (2.0 * (search::TOL_F + lip * implicit::TOL_S + 1e-6 * self.bounds.height_limit())) as f32
     }
 
-    /// The slope bound the march uses, if any.
-    pub fn slope_limit(&self) -> Option<f64> {
-        self.slope
-    }
-
     /// The box that holds the surface over the triangle of nominal corners `uv`.
     pub fn prism(&self, uv: [[f32; 2]; 3]) -> ([f32; 3], [f32; 3]) {
         let r = self.earth_radius_m;
@@ -307,14 +302,10 @@ impl Exact {
     /// The prisms of every triangle of the coarse `mesh` and the tree over them, on the
     /// current rayon pool.
     pub fn build(mesh: Arc<Mesh>, surface: ExactSurface) -> Exact {
-        use rayon::prelude::*;
         let start = Instant::now();
         let prisms = prisms_of(&mesh, &surface);
         let tree = BoxTree::build(&prisms);
-        let top_y = prisms
-            .par_iter()
-            .map(|p| p.1[1])
-            .reduce(|| f32::NEG_INFINITY, f32::max);
+        let top_y = top_of(&prisms);
         Exact {
             mesh,
             surface,
@@ -340,6 +331,14 @@ impl Exact {
     pub fn surface(&self) -> &ExactSurface {
         &self.surface
     }
+}
+
+/// The highest point of any of `prisms`: nothing of the surface lies above it.
+pub fn top_of(prisms: &[([f32; 3], [f32; 3])]) -> f32 {
+    prisms
+        .iter()
+        .map(|p| p.1[1])
+        .fold(f32::NEG_INFINITY, f32::max)
 }
 
 /// The prism of every triangle of `mesh`, in triangle order.
