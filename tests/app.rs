@@ -130,6 +130,8 @@ fn tiny_compare_runs_end_to_end_and_writes_every_file() {
         max_boost: 16,
         filtered: true,
         exact: false,
+        against: vastocean::app::compare::Against::PaperHigh,
+        truth_boost: vastocean::app::compare::DEFAULT_TRUTH_BOOST,
         out: dir.clone(),
         progress: false,
     };

@@ -59,6 +59,8 @@ fn compare(spp: u32, seed: u64, max_boost: u16) -> CompareSummary {
         max_boost,
         filtered: false,
         exact: false,
+        against: vastocean::app::compare::Against::PaperHigh,
+        truth_boost: vastocean::app::compare::DEFAULT_TRUTH_BOOST,
         out: out.clone(),
         progress: false,
     };

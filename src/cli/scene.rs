@@ -351,6 +351,17 @@ pub struct CompareArgs {
     /// normals: scenario `low_exact`, with its statistics beside the paper's (docs/exact.md).
     #[arg(long)]
     pub exact: bool,
+    /// What every scenario is measured against: the paper's baseline (paper-high, its high
+    /// tessellation with mapped normals), or that and beside it the truth: the exact displaced
+    /// surface shaded with its own tangent plane, on which no wrong-side event arises,
+    /// rendered on the analysed rows only (truth.exr; per scenario std_vs_truth in
+    /// summary.json, stats_vs_truth.csv; docs/comparison.md).
+    #[arg(long, value_parser = choice::<app::compare::Against>(), default_value = "paper-high")]
+    pub against: app::compare::Against,
+    /// The truth's samples per analysed pixel, in multiples of that pixel's samples in the
+    /// scenarios.
+    #[arg(long, default_value_t = app::compare::DEFAULT_TRUTH_BOOST, value_parser = clap::value_parser!(u16).range(1..=64))]
+    pub truth_boost: u16,
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
@@ -387,6 +398,8 @@ impl CompareArgs {
             max_boost: self.max_boost,
             filtered: self.filtered,
             exact: self.exact,
+            against: self.against,
+            truth_boost: self.truth_boost,
             out: self.out.clone(),
             progress: true,
         })

@@ -286,11 +286,11 @@ impl SceneConfig {
             ));
         }
         if r.surface == render::SurfaceKind::Exact {
-            if r.normals != NormalMode::Mapped {
+            if !matches!(r.normals, NormalMode::Mapped | NormalMode::Geometric) {
                 return Err(invalid(
                     "render.normals",
-                    "mapped with render.surface = \"exact\" (the surface's own normal at the \
-                     point hit)",
+                    "mapped or geometric with render.surface = \"exact\" (the layers' normal, \
+                     or the surface's own tangent plane, at the point hit)",
                     r.normals,
                 ));
             }

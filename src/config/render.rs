@@ -16,9 +16,14 @@ pub enum NormalMode {
     /// waves below it are a Gaussian slope distribution (a rough dielectric) whose covariance
     /// is the realization's own, with the sun sampled at every rough hit (docs/filtered.md).
     Filtered,
+    /// The surface's own normal: on the exact surface (`render.surface = "exact"`) its
+    /// tangent plane, so no shading normal can disagree with the geometry and the wrong-side
+    /// question never arises (`compare --against truth` renders its truth so); on a mesh the
+    /// flat triangle's.
+    Geometric,
 }
 
-super::choice!(NormalMode { Vertex => "vertex", Mapped => "mapped", Filtered => "filtered" });
+super::choice!(NormalMode { Vertex => "vertex", Mapped => "mapped", Filtered => "filtered", Geometric => "geometric" });
 
 /// Which lobe filtered normals give the waves below the footprint (docs/filtered.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]

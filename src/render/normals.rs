@@ -1,12 +1,14 @@
-//! Shading normals at a batch of hits: the interpolated vertex normals, or the ocean's own
+//! Shading normals at a batch of hits: the interpolated vertex normals, the ocean's own
 //! normals recomputed from the layers at the interpolated texture coordinate (paper section 4),
-//! with the cost of the mapped normals measured as the render goes.
+//! with the cost of the mapped normals measured as the render goes, or the surface's own
+//! geometric normal.
 
 use glam::Vec3;
 
 use super::counters::Counters;
 use super::earth_tilt::tilt_to_earth_many;
 use super::integrator::{CAMERA_BATCH, SceneRef, TraceSettings};
+use super::interface::surface_point;
 use crate::accel::Hit;
 use crate::config::NormalMode;
 use crate::mesh::Mesh;
@@ -98,6 +100,16 @@ impl SceneRef<'_> {
                 c.normal_evals += n as u64;
                 for (&i, nm) in at[..n].iter().zip(normals) {
                     out[i as usize] = nm;
+                }
+            }
+            (NormalMode::Geometric, _) => {
+                for (o, h) in out.iter_mut().zip(hits) {
+                    if let Some(h) = h {
+                        *o = match self.accel.surface_normal(h) {
+                            Some((n, _)) => Vec3::from(n).normalize_or(Vec3::Y),
+                            None => surface_point(mesh, h).ng,
+                        };
+                    }
                 }
             }
             _ => {

@@ -2,10 +2,10 @@
 //! (high/low tessellation x with/without normal mapping) and a noise floor are rendered from
 //! one ocean, one sky and one camera, each tessellation built once and traced for every
 //! scenario that uses it; then the per-row statistics against the baseline (scenario 1), the
-//! renders, `stats.csv`, the plots and `summary.json`.
+//! renders, `stats.csv`, the plots and `summary.json`. With `--against truth` every scenario is
+//! also measured against a truth free of wrong-side events ([`truth`]).
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use std::time::Instant;
 
 use serde::Serialize;
@@ -17,8 +17,7 @@ use crate::analysis::error::{
 use crate::analysis::plot;
 use crate::config::{LodConfig, NormalMode, Projection, SceneConfig, SurfaceKind};
 use crate::image_io::{png_exposure, write_exr_with, write_json, write_png};
-use crate::render::film::{MAX_BATCHES, Samples};
-use crate::render::pipeline::{Prepared, Rendered, Setup, prepare_with};
+use render::{exact_scene, render_scenarios, with_lod};
 
 /// What to compare: one scene (ocean, sky, camera, samples) and the two tessellations.
 #[derive(Clone, Debug, Serialize)]
@@ -39,6 +38,11 @@ pub struct CompareJob {
     /// (scenario `low_exact`, last; docs/exact.md).
     #[serde(default)]
     pub exact: bool,
+    /// What the scenarios are measured against: the paper's baseline, or that and the truth.
+    #[serde(default)]
+    pub against: Against,
+    /// The truth's samples per analysed pixel, in multiples of the scenarios'.
+    pub truth_boost: u16,
     /// Output folder.
     pub out: PathBuf,
     /// Progress on stderr.
@@ -145,6 +149,13 @@ pub struct ScenarioInfo {
     pub counters: crate::render::Counters,
     pub exr: PathBuf,
     pub png: PathBuf,
+    /// With `--against truth`: the corrected band std of this scenario's difference from the
+    /// truth, and the band mean of that difference, with their intervals (the noise floor,
+    /// a second draw of the baseline, is not measured against it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub std_vs_truth: Option<Interval>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mean_vs_truth: Option<Interval>,
 }
 
 /// `summary.json`: band averages (the paper's, and noise-corrected with 95 % intervals), the
@@ -215,22 +226,18 @@ pub struct CompareSummary {
     pub stats_csv: PathBuf,
     pub stats_png: PathBuf,
     pub sheet_png: PathBuf,
-}
-
-/// The scene as one tessellation renders it.
-fn with_lod(scene: &SceneConfig, lod: &LodConfig) -> SceneConfig {
-    SceneConfig {
-        lod: lod.clone(),
-        ..scene.clone()
-    }
-}
-
-/// The scene of scenario `low_exact`: the low tessellation's exact surface, mapped normals.
-fn exact_scene(job: &CompareJob) -> SceneConfig {
-    let mut c = with_lod(&job.scene, &job.low);
-    c.render.surface = SurfaceKind::Exact;
-    c.render.normals = NormalMode::Mapped;
-    c
+    pub against: Against,
+    /// With `--against truth`: how the truth was rendered and its wrong-side share, its
+    /// analysed rows, every scenario against it (per scenario `std_vs_truth` in `scenarios`)
+    /// and the per-row statistics in `stats_vs_truth.csv`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub truth: Option<Truth>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub truth_rows: Option<Vec<TruthRow>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimates_vs_truth: Option<Estimates>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stats_vs_truth_csv: Option<PathBuf>,
 }
 
 /// Checks everything that can be checked before any work: the scene with each tessellation,
@@ -247,8 +254,13 @@ fn check(job: &CompareJob) -> Result<(), AppError> {
         scene.validate()?;
         crate::lod::params_for(&scene.lod, &scene.camera)?;
     }
-    if job.exact {
+    if job.exact || job.against == Against::Truth {
         exact_scene(job).validate()?;
+    }
+    if job.truth_boost == 0 {
+        return Err(AppError::input(
+            "the truth's boost (--truth-boost) is at least 1",
+        ));
     }
     let spp = job.scene.render.spp;
     if (spp as usize) < MIN_BATCHES || !(spp as usize).is_multiple_of(MIN_BATCHES) {
@@ -287,160 +299,15 @@ fn check(job: &CompareJob) -> Result<(), AppError> {
 /// not to warn.
 pub const BASELINE_NOISE_SHARE: f64 = 0.25;
 
-/// A scene prepared when its scenarios' turn comes (after the previous one is freed).
-type Later<'a> = Box<dyn FnOnce() -> Result<Prepared, crate::render::pipeline::RenderError> + 'a>;
-
-/// Renders every scenario, each tessellation prepared once, after the pilot that places the
-/// samples; returned in [`CompareJob::scenarios`] order, with how the samples were spent.
-fn render_scenarios(
-    job: &CompareJob,
-) -> Result<(Vec<(ScenarioInfo, Rendered)>, SamplingReport), AppError> {
-    let say = |what: String| {
-        if job.progress {
-            eprintln!("compare: {what}");
-        }
-    };
-    let t = Instant::now();
-    // The low tessellation first (its pilots need it), kept while the high one is traced.
-    let (high_cfg, low_cfg) = (
-        with_lod(&job.scene, &job.high),
-        with_lod(&job.scene, &job.low),
-    );
-    say(format!("low tessellation ({})", job.low.preset));
-    let low = prepare_with(
-        &low_cfg,
-        Setup {
-            progress: job.progress,
-            ..Setup::default()
-        },
-    )?;
-    let mut pilots = Vec::new();
-    let pilot = |prepared: &Prepared, cfg: &SceneConfig, sc: Scenario| {
-        let mut c = cfg.clone();
-        c.render.normals = sc.normals();
-        c.render.spp = sampling::pilot_spp(cfg.render.spp);
-        c.render.seed = cfg.render.seed.wrapping_add(sampling::PILOT_SEED);
-        say(format!("pilot of {} at {} spp", sc.name(), c.render.spp));
-        prepared.render(&c, job.progress).map(|r| r.film)
-    };
-    let boosting = job.max_boost > 1;
-    if boosting {
-        for sc in [Scenario::LowMapped, Scenario::LowUnmapped] {
-            pilots.push(pilot(&low, &low_cfg, sc)?);
-        }
-    }
-    let mut seconds_pilot = t.elapsed().as_secs_f64();
-    say(format!("high tessellation ({})", job.high.preset));
-    // the same sea and sky: the low tessellation's, not a second build of them
-    let high = prepare_with(
-        &high_cfg,
-        Setup {
-            ocean: Some(Arc::clone(&low.ocean)),
-            sky: Some(Arc::clone(&low.sky)),
-            progress: job.progress,
-            ..Setup::default()
-        },
-    )?;
-    let camera = crate::render::Camera::new(
-        job.scene.camera.projection,
-        job.scene.camera.width,
-        job.scene.camera.aspect,
-    );
-    let boost = if boosting {
-        let t = Instant::now();
-        pilots.push(pilot(&high, &high_cfg, Scenario::HighMapped)?);
-        seconds_pilot += t.elapsed().as_secs_f64();
-        let limit = sampling::boost_limit(job.scene.render.spp, job.max_boost);
-        sampling::boost_map(&pilots, &camera, job.rows_deg, limit)
-    } else {
-        vec![1; camera.width * camera.height]
-    };
-    drop(pilots);
-    let samples = Samples {
-        boost: Some(&boost),
-        ..Samples::ALL
-    };
-    let mut out = Vec::new();
-    let (ocean, sky) = (Arc::clone(&low.ocean), Arc::clone(&low.sky));
-    let exact_cfg = exact_scene(job);
-    let exact = || {
-        prepare_with(
-            &exact_cfg,
-            Setup {
-                ocean: Some(ocean),
-                sky: Some(sky),
-                progress: job.progress,
-                ..Setup::default()
-            },
-        )
-    };
-    let groups: [(bool, Later, &SceneConfig, &LodConfig); 3] = [
-        (true, Box::new(|| Ok(high)), &high_cfg, &job.high),
-        (false, Box::new(|| Ok(low)), &low_cfg, &job.low),
-        (false, Box::new(exact), &exact_cfg, &job.low),
-    ];
-    for (k, (is_high, prepared, cfg, lod)) in groups.into_iter().enumerate() {
-        let exact = k == 2;
-        let wanted: Vec<Scenario> = job
-            .scenarios()
-            .into_iter()
-            .filter(|s| s.high() == is_high && (*s == Scenario::LowExact) == exact)
-            .collect();
-        if wanted.is_empty() {
-            continue;
-        }
-        if exact {
-            say(format!(
-                "exact surface in the low tessellation ({})",
-                lod.preset
-            ));
-        }
-        let prepared: Prepared = prepared()?;
-        for sc in wanted {
-            let mut c = cfg.clone();
-            c.render.normals = sc.normals();
-            c.render.seed = cfg.render.seed.wrapping_add(sc.seed_offset());
-            let (r, _) = prepared.render_samples(&c, MAX_BATCHES, samples, false, job.progress)?;
-            let rep = &r.report;
-            let info = ScenarioInfo {
-                name: sc,
-                tessellation: format!("{} ({} triangles)", lod.preset, rep.triangles),
-                normals: sc.normals(),
-                seed: c.render.seed,
-                triangles: rep.triangles,
-                seconds_tessellation: rep.seconds_tessellation,
-                seconds_build: rep.seconds_build,
-                seconds_render: rep.seconds_trace,
-                wrong_side_count: rep.wrong_side_count,
-                nan_count: rep.nan_count,
-                counters: rep.counters,
-                exr: job.out.join(format!("{}.exr", sc.name())),
-                png: job.out.join(format!("{}.png", sc.name())),
-            };
-            out.push((info, r));
-        }
-        // The high tessellation's BVH is freed here, before the low one is traced.
-        drop(prepared);
-    }
-    let order = job.scenarios();
-    out.sort_by_key(|(info, _)| order.iter().position(|s| *s == info.name));
-    let report = sampling::report(
-        &boost,
-        &camera,
-        job.rows_deg,
-        job.scene.render.spp,
-        job.max_boost,
-        job.scene.render.seed.wrapping_add(sampling::PILOT_SEED),
-        seconds_pilot,
-    );
-    Ok((out, report))
-}
-
 /// Runs the comparison into `job.out`.
 pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
     check(job)?;
     let t_total = Instant::now();
-    let (runs, sampling) = render_scenarios(job)?;
+    let render::Renders {
+        mut runs,
+        truth,
+        sampling,
+    } = render_scenarios(job)?;
     let (top, bottom) = job.rows_deg;
 
     // One exposure for all, so the sheet compares like with like.
@@ -453,6 +320,15 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
             .collect();
         write_exr_with(&info.exr, &r.film.image, &extra)?;
         write_png(&info.png, &r.film.image, exposure)?;
+    }
+    if let Some((t, r)) = &truth {
+        let channels = film_channels(&r.film);
+        let extra: Vec<(&str, &[f32])> = channels
+            .iter()
+            .map(|(n, v)| (n.as_str(), v.as_slice()))
+            .collect();
+        write_exr_with(&t.exr, &r.film.image, &extra)?;
+        write_png(&t.exr.with_extension("png"), &r.film.image, exposure)?;
     }
 
     let compared: Vec<(String, &crate::render::film::Film)> = runs[1..]
@@ -514,6 +390,27 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
         .iter()
         .map(|s| s.std_corrected.value)
         .fold(f64::INFINITY, f64::min);
+    // Every scenario against the truth, each scenario's figures beside the paper's.
+    let vs_truth = match &truth {
+        Some((_, r)) => Some(truth::estimates(job, &runs, r)?),
+        None => None,
+    };
+    let stats_vs_truth_csv = match &vs_truth {
+        Some(est) => {
+            let path = job.out.join("stats_vs_truth.csv");
+            write_stats_csv(&path, est)?;
+            for (info, _) in runs.iter_mut() {
+                let e = est.scenarios.iter().find(|s| s.name == info.name.name());
+                info.std_vs_truth = e.map(|e| e.std_corrected);
+                info.mean_vs_truth = e.map(|e| e.mean);
+            }
+            Some(path)
+        }
+        None => None,
+    };
+    let truth_rows = truth
+        .as_ref()
+        .map(|(_, r)| truth::rows(&r.camera, &r.film, job.rows_deg));
     let summary = CompareSummary {
         commit: super::commit(),
         std_high_unmapped: e[0].std,
@@ -559,14 +456,22 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
         stats_csv,
         stats_png,
         sheet_png,
+        against: job.against,
+        truth: truth.map(|(t, _)| t),
+        truth_rows,
+        estimates_vs_truth: vs_truth,
+        stats_vs_truth_csv,
     };
     write_json(&job.out.join("summary.json"), &summary)?;
     Ok(summary)
 }
 
 pub mod realizations;
+mod render;
 mod report;
 pub mod sampling;
+pub mod truth;
 pub use report::NOISE_CHECK_RANGE;
 use report::{film_channels, write_stats_csv};
 pub use sampling::SamplingReport;
+pub use truth::{Against, DEFAULT_TRUTH_BOOST, Truth, TruthRow};

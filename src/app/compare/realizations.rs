@@ -251,6 +251,8 @@ mod tests {
             max_boost: 64,
             filtered: false,
             exact: false,
+            against: crate::app::compare::Against::PaperHigh,
+            truth_boost: crate::app::compare::DEFAULT_TRUTH_BOOST,
             out: std::env::temp_dir().join("vastocean-realizations-refused"),
             progress: false,
         };

@@ -111,6 +111,15 @@ impl crate::app::Remarks for CompareSummary {
                 num(check.ci[1])
             ));
         }
+        if let Some(t) = &self.truth
+            && t.wrong_side_share > super::truth::MAX_WRONG_SIDE_SHARE
+        {
+            w.push(format!(
+                "{:.3}% of the truth's hits had a wrong-side event (more than {}%): it is not free of the policy it is meant to judge",
+                100.0 * t.wrong_side_share,
+                100.0 * super::truth::MAX_WRONG_SIDE_SHARE
+            ));
+        }
         w
     }
 }
@@ -207,6 +216,22 @@ impl fmt::Display for CompareSummary {
                 ratio(&r.without_glint)
             )?;
         }
+        if let (Some(t), Some(est)) = (&self.truth, &self.estimates_vs_truth) {
+            writeln!(
+                f,
+                "  against the truth ({} surface, {} normals, {}x the samples; {} of {} hits with a wrong-side event): corrected std | band mean difference",
+                t.surface, t.normals, t.boost, t.wrong_side_events, t.counters.hits
+            )?;
+            for e in &est.scenarios {
+                writeln!(
+                    f,
+                    "  {:<14} {} | {}",
+                    e.name,
+                    ci(&e.std_corrected),
+                    ci(&e.mean)
+                )?;
+            }
+        }
         for sc in &self.scenarios {
             writeln!(
                 f,
@@ -216,6 +241,13 @@ impl fmt::Display for CompareSummary {
                 sc.seconds_tessellation,
                 sc.seconds_build,
                 sc.seconds_render
+            )?;
+        }
+        if let Some(t) = &self.truth {
+            writeln!(
+                f,
+                "  {:<14} exact surface       BVH {:.2} s  render {:.2} s  ({} samples)",
+                "truth", t.seconds_build, t.seconds_render, t.samples
             )?;
         }
         let dir = self.stats_csv.parent().unwrap_or(Path::new("."));

@@ -57,6 +57,8 @@ pub fn run_case(
         max_boost: plan.max_boost,
         filtered: false,
         exact: false,
+        against: crate::app::compare::Against::PaperHigh,
+        truth_boost: crate::app::compare::DEFAULT_TRUTH_BOOST,
         out: cdir,
         progress,
     };

@@ -69,7 +69,8 @@ pub(super) fn write(
             error_ci: p.error_ci,
             group: match p.normals {
                 NormalMode::Mapped => 0,
-                NormalMode::Vertex => 1,
+                // (bench accuracy renders no flat-shaded mesh; grouped with the unmapped)
+                NormalMode::Vertex | NormalMode::Geometric => 1,
                 NormalMode::Filtered => 2,
             },
             pareto: p.pareto,
