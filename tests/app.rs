@@ -132,6 +132,7 @@ fn tiny_compare_runs_end_to_end_and_writes_every_file() {
         exact: false,
         against: vastocean::app::compare::Against::PaperHigh,
         truth_boost: vastocean::app::compare::DEFAULT_TRUTH_BOOST,
+        truth_from: None,
         out: dir.clone(),
         progress: false,
     };

@@ -61,6 +61,7 @@ fn compare(spp: u32, seed: u64, max_boost: u16) -> CompareSummary {
         exact: false,
         against: vastocean::app::compare::Against::PaperHigh,
         truth_boost: vastocean::app::compare::DEFAULT_TRUTH_BOOST,
+        truth_from: None,
         out: out.clone(),
         progress: false,
     };

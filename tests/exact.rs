@@ -182,6 +182,7 @@ fn compare_refuses_an_exact_scene_and_checks_its_exact_scenario_before_any_work(
         exact,
         against: vastocean::app::compare::Against::PaperHigh,
         truth_boost: vastocean::app::compare::DEFAULT_TRUTH_BOOST,
+        truth_from: None,
         out: out.clone(),
         progress: false,
     };
@@ -225,6 +226,7 @@ fn compare_against_truth_measures_every_scenario_against_a_truth_free_of_wrong_s
         exact: false,
         against: Against::Truth,
         truth_boost: 2,
+        truth_from: None,
         out: out.clone(),
         progress: false,
     };
@@ -279,4 +281,33 @@ fn compare_against_truth_measures_every_scenario_against_a_truth_free_of_wrong_s
     );
     assert!(json["truth"]["wrong_side_share"].as_f64().is_some());
     assert!(json["scenarios"][2]["std_vs_truth"]["ci"].is_array());
+
+    // Another policy reuses that truth: nothing of it is rendered again.
+    let again = std::env::temp_dir().join("vastocean-compare-truth-reused");
+    let mut reuse = job.clone();
+    reuse.scene.render.wrong_side = vastocean::config::WrongSide::Mirror;
+    reuse.truth_from = Some(out.clone());
+    reuse.out = again.clone();
+    let r = run(&reuse).unwrap();
+    let rt = r.truth.as_ref().unwrap();
+    assert_eq!(rt.reused_from.as_deref(), Some(out.as_path()));
+    assert_eq!(rt.samples, t.samples);
+    assert!(!again.join("truth.exr").exists());
+    assert_eq!(r.truth_rows.as_ref().unwrap().len(), s.rows);
+    for (a, b) in rows.iter().zip(r.truth_rows.as_ref().unwrap()) {
+        assert_eq!(a.luminance, b.luminance);
+    }
+    assert!(r.scenarios[3].std_vs_truth.is_some());
+    // a truth of another sea is refused before anything renders, naming what differs
+    let mut other = reuse.clone();
+    other.scene.ocean.wind_speed += 1.0;
+    other.out = std::env::temp_dir().join("vastocean-compare-truth-refused");
+    let e = run(&other).unwrap_err();
+    assert_eq!(e.exit_code(), 2, "{e}");
+    assert!(e.to_string().contains("[ocean]"), "{e}");
+    assert!(!other.out.join("summary.json").exists());
+    // and --truth-from without --against truth is refused
+    let mut paper = reuse.clone();
+    paper.against = Against::PaperHigh;
+    assert_eq!(run(&paper).unwrap_err().exit_code(), 2);
 }

@@ -19,6 +19,7 @@ pub struct OceanArgs {
     #[arg(long, default_value_t = OceanParams::default().depth_m)]
     depth: f64,
     /// Scale the realization to this RMS height, m (the paper's Table 1 gives one per case).
+    /// Without it, --hs or a preset, the default scene's 0.225 m, as `render` has it.
     #[arg(long, conflicts_with = "hs")]
     rms: Option<f64>,
     /// Scale the realization to this significant wave height Hs = 4 x RMS, m.
@@ -155,7 +156,17 @@ impl OceanArgs {
             wind_speed: self.wind,
             fetch_km: self.fetch,
             depth_m: self.depth,
-            rms_m: self.rms,
+            // the default scene's height target, as `render` has it, unless a height or a
+            // preset says otherwise
+            rms_m: if self.rms.is_some()
+                || self.hs.is_some()
+                || self.sea.beaufort.is_some()
+                || self.sea.douglas.is_some()
+            {
+                self.rms
+            } else {
+                defaults.rms_m
+            },
             hs_m: self.hs,
             tp_s: self.tp,
             gamma: self.gamma,

@@ -362,6 +362,12 @@ pub struct CompareArgs {
     /// scenarios.
     #[arg(long, default_value_t = app::compare::DEFAULT_TRUTH_BOOST, value_parser = clap::value_parser!(u16).range(1..=64))]
     pub truth_boost: u16,
+    /// Reuse the truth an earlier `compare --against truth` of the same scene wrote into DIR
+    /// (truth.exr, truth.json) instead of rendering it again: no wrong-side policy touches the
+    /// truth, so a sweep over --wrong-side renders it once. Implies --against truth; refused
+    /// when that truth's sea, sky, camera or rows differ.
+    #[arg(long, value_name = "DIR")]
+    pub truth_from: Option<PathBuf>,
     /// Output folder.
     #[arg(long)]
     out: PathBuf,
@@ -398,7 +404,12 @@ impl CompareArgs {
             max_boost: self.max_boost,
             filtered: self.filtered,
             exact: self.exact,
-            against: self.against,
+            against: if self.truth_from.is_some() {
+                app::compare::Against::Truth
+            } else {
+                self.against
+            },
+            truth_from: self.truth_from.clone(),
             truth_boost: self.truth_boost,
             out: self.out.clone(),
             progress: true,

@@ -43,6 +43,10 @@ pub struct CompareJob {
     pub against: Against,
     /// The truth's samples per analysed pixel, in multiples of the scenarios'.
     pub truth_boost: u16,
+    /// Reuse the truth an earlier comparison of the same scene wrote into this folder instead
+    /// of rendering one (with `against` = truth).
+    #[serde(default)]
+    pub truth_from: Option<PathBuf>,
     /// Output folder.
     pub out: PathBuf,
     /// Progress on stderr.
@@ -257,6 +261,11 @@ fn check(job: &CompareJob) -> Result<(), AppError> {
     if job.exact || job.against == Against::Truth {
         exact_scene(job).validate()?;
     }
+    if job.truth_from.is_some() && job.against != Against::Truth {
+        return Err(AppError::input(
+            "--truth-from reuses a truth: it goes with --against truth",
+        ));
+    }
     if job.truth_boost == 0 {
         return Err(AppError::input(
             "the truth's boost (--truth-boost) is at least 1",
@@ -303,6 +312,10 @@ pub const BASELINE_NOISE_SHARE: f64 = 0.25;
 pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
     check(job)?;
     let t_total = Instant::now();
+    let reused = match &job.truth_from {
+        Some(dir) => Some(truth::load(job, dir)?),
+        None => None,
+    };
     let render::Renders {
         mut runs,
         truth,
@@ -329,7 +342,14 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
             .collect();
         write_exr_with(&t.exr, &r.film.image, &extra)?;
         write_png(&t.exr.with_extension("png"), &r.film.image, exposure)?;
+        let record = truth::TruthFile {
+            scene: truth::scene(job),
+            rows_deg: job.rows_deg,
+            truth: t.clone(),
+        };
+        write_json(&job.out.join("truth.json"), &record)?;
     }
+    let truth = truth.map(|(t, r)| (t, r.film)).or(reused);
 
     let compared: Vec<(String, &crate::render::film::Film)> = runs[1..]
         .iter()
@@ -392,7 +412,7 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
         .fold(f64::INFINITY, f64::min);
     // Every scenario against the truth, each scenario's figures beside the paper's.
     let vs_truth = match &truth {
-        Some((_, r)) => Some(truth::estimates(job, &runs, r)?),
+        Some((_, film)) => Some(truth::estimates(job, &runs, film)?),
         None => None,
     };
     let stats_vs_truth_csv = match &vs_truth {
@@ -410,7 +430,7 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
     };
     let truth_rows = truth
         .as_ref()
-        .map(|(_, r)| truth::rows(&r.camera, &r.film, job.rows_deg));
+        .map(|(_, film)| truth::rows(&runs[0].1.camera, film, job.rows_deg));
     let summary = CompareSummary {
         commit: super::commit(),
         std_high_unmapped: e[0].std,

@@ -253,6 +253,7 @@ mod tests {
             exact: false,
             against: crate::app::compare::Against::PaperHigh,
             truth_boost: crate::app::compare::DEFAULT_TRUTH_BOOST,
+            truth_from: None,
             out: std::env::temp_dir().join("vastocean-realizations-refused"),
             progress: false,
         };

@@ -14,7 +14,7 @@ use crate::render::film::{MAX_BATCHES, Samples};
 use crate::render::pipeline::{Prepared, Rendered, Setup, prepare_with};
 
 /// What [`render_scenarios`] returns: the scenarios in [`CompareJob::scenarios`] order, the
-/// truth if asked for, and how the samples were spent.
+/// truth if asked for (and not reused), and how the samples were spent.
 pub(super) struct Renders {
     pub runs: Vec<(ScenarioInfo, Rendered)>,
     pub truth: Option<(Truth, Rendered)>,
@@ -135,7 +135,7 @@ pub(super) fn render_scenarios(job: &CompareJob) -> Result<Renders, AppError> {
             .into_iter()
             .filter(|s| s.high() == is_high && (*s == Scenario::LowExact) == exact)
             .collect();
-        let with_truth = exact && job.against == truth::Against::Truth;
+        let with_truth = exact && job.against == truth::Against::Truth && job.truth_from.is_none();
         if wanted.is_empty() && !with_truth {
             continue;
         }
@@ -176,7 +176,8 @@ pub(super) fn render_scenarios(job: &CompareJob) -> Result<Renders, AppError> {
                 "truth: the exact surface, geometric normals, {}x the samples on the analysed rows",
                 job.truth_boost
             ));
-            truth_run = Some(truth::render(job, &prepared, cfg, &boost, &camera)?);
+            let cfg = truth::scene(job);
+            truth_run = Some(truth::render(job, &prepared, &cfg, &boost, &camera)?);
         }
         // The high tessellation's BVH is freed here, before the low one is traced.
         drop(prepared);

@@ -7,9 +7,11 @@
 //! mirror reflection leaves at the elevation it arrived at and no policy is ever consulted. It
 //! is rendered on the analysed rows only, with `truth_boost` times each pixel's samples, and
 //! every scenario (the paper's baseline included) is measured against it with the same
-//! estimator.
+//! estimator. The truth is by far a comparison's dearest part and no wrong-side policy touches
+//! it, so `--truth-from DIR` reuses one an earlier comparison of the same scene rendered
+//! (`truth.exr` and `truth.json` say what it is), for a sweep over policies.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
@@ -17,8 +19,9 @@ use super::{CompareJob, Scenario, ScenarioInfo};
 use crate::analysis::error::{EstimateError, Estimates, Estimator, Inputs};
 use crate::app::AppError;
 use crate::color::luminance;
-use crate::config::{NormalMode, SceneConfig};
-use crate::render::film::{Film, MAX_BATCHES, Samples};
+use crate::config::{NormalMode, SceneConfig, SurfaceKind};
+use crate::image_io::{read_exr, read_exr_channel};
+use crate::render::film::{Batches, Film, MAX_BATCHES, Samples};
 use crate::render::pipeline::{Prepared, Rendered};
 use crate::render::{Camera, Counters};
 
@@ -44,7 +47,7 @@ pub const DEFAULT_TRUTH_BOOST: u16 = 4;
 pub const MAX_WRONG_SIDE_SHARE: f64 = 1e-3;
 
 /// Added to the scene's sample seed for the truth's samples.
-const TRUTH_SEED: u64 = 0x7472_7574_68;
+const TRUTH_SEED: u64 = 0x0074_7275_7468;
 
 /// One analysed row of the truth.
 #[derive(Clone, Copy, Debug, Serialize)]
@@ -57,11 +60,13 @@ pub struct TruthRow {
 }
 
 /// The truth as rendered.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Truth {
-    pub surface: &'static str,
+    pub surface: SurfaceKind,
     pub normals: NormalMode,
     pub seed: u64,
+    /// Samples per pixel before the boosts.
+    pub spp: u32,
     /// Samples of each analysed pixel, in multiples of its samples in the scenarios.
     pub boost: u16,
     /// Samples traced (analysed rows only; every other pixel takes none).
@@ -74,6 +79,118 @@ pub struct Truth {
     pub wrong_side_share: f64,
     pub counters: Counters,
     pub exr: PathBuf,
+    /// With `--truth-from`: the folder whose truth this comparison reused.
+    #[serde(default)]
+    pub reused_from: Option<PathBuf>,
+}
+
+/// `truth.json`, beside `truth.exr`: the truth's scene and how it was rendered, which
+/// `--truth-from` checks before it reuses the image.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct TruthFile {
+    pub scene: SceneConfig,
+    pub rows_deg: (f64, f64),
+    pub truth: Truth,
+}
+
+/// The scene the truth renders: the low tessellation's exact surface, geometric normals.
+pub(super) fn scene(job: &CompareJob) -> SceneConfig {
+    let mut c = super::render::exact_scene(job);
+    c.render.normals = NormalMode::Geometric;
+    c
+}
+
+/// What of two truth scenes differs in a way that changes the converged image, by section;
+/// empty when nothing does. The sample seed, the wrong-side policy (never consulted), the
+/// threads and backend, and the tessellation (the prisms only bound the surface) do not.
+fn differences(a: &SceneConfig, b: &SceneConfig) -> Vec<&'static str> {
+    let normal = |c: &SceneConfig| {
+        let mut c = c.clone();
+        c.render.seed = 0;
+        c.render.wrong_side = Default::default();
+        c.render.threads = 0;
+        c.render.backend = Default::default();
+        c.lod = Default::default();
+        c
+    };
+    let (a, b) = (normal(a), normal(b));
+    let mut d = Vec::new();
+    if a.ocean != b.ocean {
+        d.push("[ocean]");
+    }
+    if a.sky != b.sky {
+        d.push("[sky]");
+    }
+    if a.camera != b.camera {
+        d.push("[camera]");
+    }
+    if a != b && d.is_empty() {
+        d.push("[render]");
+    }
+    d
+}
+
+/// The truth an earlier comparison wrote into `dir`, checked against this job's scene and rows.
+pub(super) fn load(job: &CompareJob, dir: &Path) -> Result<(Truth, Film), AppError> {
+    let json = dir.join("truth.json");
+    let text = std::fs::read_to_string(&json).map_err(|e| {
+        AppError::input(format!(
+            "--truth-from {}: cannot read {} ({e}); it is written by compare --against truth",
+            dir.display(),
+            json.display()
+        ))
+    })?;
+    let file: TruthFile = serde_json::from_str(&text).map_err(|e| {
+        AppError::input(format!(
+            "--truth-from: {} is not a truth's record: {e}",
+            json.display()
+        ))
+    })?;
+    let d = differences(&file.scene, &scene(job));
+    if !d.is_empty() {
+        return Err(AppError::input(format!(
+            "--truth-from {}: that truth was rendered for another scene (its {} differ)",
+            dir.display(),
+            d.join(", ")
+        )));
+    }
+    if file.rows_deg != job.rows_deg {
+        return Err(AppError::input(format!(
+            "--truth-from {}: that truth covers the rows {}:{}, this comparison analyses {}:{}",
+            dir.display(),
+            file.rows_deg.0,
+            file.rows_deg.1,
+            job.rows_deg.0,
+            job.rows_deg.1
+        )));
+    }
+    let exr = dir.join("truth.exr");
+    let image = read_exr(&exr)?;
+    let var_y = read_exr_channel(&exr, "Y.variance")?;
+    let k = MAX_BATCHES;
+    let mut luminance = vec![0.0f32; image.pixels.len() * k];
+    for b in 0..k {
+        let channel = read_exr_channel(&exr, &format!("Y.batch{b}"))?;
+        for (p, v) in channel.into_iter().enumerate() {
+            luminance[p * k + b] = v;
+        }
+    }
+    let spp = file.truth.spp;
+    let film = Film {
+        image,
+        var_y,
+        spp,
+        batches: Some(Batches {
+            k,
+            spp: vec![spp / k as u32; k],
+            luminance,
+        }),
+    };
+    let truth = Truth {
+        reused_from: Some(dir.to_path_buf()),
+        ..file.truth
+    };
+    Ok((truth, film))
 }
 
 /// The truth's samples per pixel, in multiples of the scene's spp: `job.truth_boost` times the
@@ -114,8 +231,8 @@ pub fn wrong_side_events(c: &Counters) -> u64 {
     c.wrong_side + c.backfacing_shading + c.bent
 }
 
-/// Renders the truth with `prepared` (the exact surface; its scene `cfg`), the scenarios'
-/// per-pixel samples `boost`.
+/// Renders the truth with `prepared` (the exact surface; its scene `cfg`, from [`scene`]),
+/// the scenarios' per-pixel samples `boost`.
 pub(super) fn render(
     job: &CompareJob,
     prepared: &Prepared,
@@ -125,7 +242,6 @@ pub(super) fn render(
 ) -> Result<(Truth, Rendered), AppError> {
     let map = boost_map(job, boost, camera);
     let mut c = cfg.clone();
-    c.render.normals = NormalMode::Geometric;
     c.render.seed = cfg.render.seed.wrapping_add(TRUTH_SEED);
     let samples = Samples {
         boost: Some(&map),
@@ -135,9 +251,10 @@ pub(super) fn render(
     let counters = r.report.counters;
     let events = wrong_side_events(&counters);
     let truth = Truth {
-        surface: "exact",
-        normals: NormalMode::Geometric,
+        surface: c.render.surface,
+        normals: c.render.normals,
         seed: c.render.seed,
+        spp: c.render.spp,
         boost: job.truth_boost,
         samples: map
             .iter()
@@ -149,6 +266,7 @@ pub(super) fn render(
         wrong_side_share: events as f64 / counters.hits.max(1) as f64,
         counters,
         exr: job.out.join("truth.exr"),
+        reused_from: None,
     };
     Ok((truth, r))
 }
@@ -158,7 +276,7 @@ pub(super) fn render(
 pub(super) fn estimates(
     job: &CompareJob,
     runs: &[(ScenarioInfo, Rendered)],
-    truth: &Rendered,
+    truth: &Film,
 ) -> Result<Estimates, AppError> {
     let scenarios = runs
         .iter()
@@ -166,8 +284,8 @@ pub(super) fn estimates(
         .map(|(info, r)| (info.name.name().to_string(), &r.film))
         .collect();
     let inputs = Inputs {
-        camera: &truth.camera,
-        baseline: &truth.film,
+        camera: &runs[0].1.camera,
+        baseline: truth,
         scenarios,
         rows_deg: job.rows_deg,
         seed: job.scene.render.seed,
@@ -203,6 +321,7 @@ mod tests {
             exact: false,
             against: Against::Truth,
             truth_boost: 3,
+            truth_from: None,
             out: std::env::temp_dir(),
             progress: false,
         };

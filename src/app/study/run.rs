@@ -59,6 +59,7 @@ pub fn run_case(
         exact: false,
         against: crate::app::compare::Against::PaperHigh,
         truth_boost: crate::app::compare::DEFAULT_TRUTH_BOOST,
+        truth_from: None,
         out: cdir,
         progress,
     };
