@@ -17,6 +17,11 @@ pub struct StressArgs {
     /// with are added).
     #[arg(long, value_delimiter = ',')]
     only: Vec<String>,
+    /// What the rays meet in every cell: the mesh, or the exact displaced surface inside the
+    /// coarse tessellation's triangles (cells it cannot render, filtered normals and
+    /// paper-high, are left out; docs/exact.md).
+    #[arg(long, value_parser = super::choice::<vastocean::config::SurfaceKind>(), default_value = "mesh")]
+    surface: vastocean::config::SurfaceKind,
     /// Folder for stress.csv.
     #[arg(long, default_value = "out/stress")]
     out: PathBuf,
@@ -35,6 +40,9 @@ pub fn stress(a: StressArgs) -> Result<()> {
         StressJob::full(a.out)
     };
     job.progress = true;
+    if a.surface == vastocean::config::SurfaceKind::Exact {
+        job.on_exact_surface();
+    }
     if !a.only.is_empty() {
         job.select(&a.only)?;
     }

@@ -23,7 +23,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 use super::AppError;
-use crate::config::{Backend, SceneConfig};
+use crate::config::{Backend, LodChoice, NormalMode, SceneConfig, SurfaceKind};
 use crate::render::pipeline::{Rendered, prepare};
 
 mod matrix;
@@ -132,6 +132,31 @@ impl StressJob {
         let keep: Vec<String> = keep.iter().map(|s| s.to_string()).collect();
         self.cells.retain(|c| keep.iter().any(|k| k == c.name));
         Ok(())
+    }
+
+    /// Every cell on the exact displaced surface (`render.surface = "exact"`, docs/exact.md)
+    /// instead of the mesh. The cells it cannot render are left out, with the cells that
+    /// compare with them: other normals than mapped (the exact surface shades with mapped or
+    /// geometric normals only) and paper-high (the exact surface is found inside the coarse
+    /// tessellation's triangles; 22 M prisms would test nothing more).
+    pub fn on_exact_surface(&mut self) {
+        let can = |c: &Cell| {
+            c.scene.render.normals == NormalMode::Mapped
+                && c.scene.lod.preset != LodChoice::PaperHigh
+        };
+        let dropped: Vec<&str> = self
+            .cells
+            .iter()
+            .filter(|c| !can(c))
+            .map(|c| c.name)
+            .collect();
+        self.cells.retain(|c| {
+            can(c)
+                && !matches!(c.extra, Extra::Identical(o) | Extra::Agrees(o) if dropped.contains(&o))
+        });
+        for c in &mut self.cells {
+            c.scene.render.surface = SurfaceKind::Exact;
+        }
     }
 
     /// The quick matrix (256 px, 8 spp; paper-high left out): seconds on 2 cores.
