@@ -88,3 +88,42 @@ fn the_full_matrix_passes() {
     assert_eq!(r.failed, 0, "{r}");
     let _ = std::fs::remove_dir_all(out("full"));
 }
+
+/// `--surface exact`: every cell on the exact surface, the cells it cannot render (filtered
+/// normals, paper-high) left out with those that compare with them; a subset passes (the
+/// storms and 10 km up do not yet: docs/stability.md).
+#[test]
+fn the_matrix_runs_on_the_exact_surface() {
+    use vastocean::config::{LodChoice, NormalMode, SurfaceKind};
+    let mut full = StressJob::full(out("exact-full"));
+    let before = full.cells.len();
+    full.on_exact_surface();
+    assert!(full.cells.len() < before);
+    for c in &full.cells {
+        assert_eq!(c.scene.render.surface, SurfaceKind::Exact, "{}", c.name);
+        assert_eq!(c.scene.render.normals, NormalMode::Mapped, "{}", c.name);
+        assert_ne!(c.scene.lod.preset, LodChoice::PaperHigh, "{}", c.name);
+        assert!(!c.name.contains("filtered") && !c.name.contains("paper-high"));
+    }
+    let mut job = StressJob::quick(out("exact"));
+    job.on_exact_surface();
+    job.select(&[
+        "furnace".into(),
+        "period-multiple".into(),
+        "rust".into(),
+        "sun--10".into(),
+    ])
+    .unwrap();
+    for c in &mut job.cells {
+        c.scene.camera.width = 48;
+        c.scene.render.spp = 2;
+    }
+    let r = run(&job).unwrap();
+    assert_eq!(r.cells, 6, "{r}");
+    assert_eq!(r.failed, 0, "{r}");
+    let get = |n: &str| r.results.iter().find(|c| c.name == n).unwrap();
+    assert_eq!(get("period-multiple").identical, Some(true));
+    assert!(get("rust").agreement_z.unwrap() < 4.0);
+    assert!(get("furnace").max_luminance <= 1.0001 && get("furnace").max_luminance > 0.01);
+    let _ = std::fs::remove_dir_all(out("exact"));
+}
