@@ -308,6 +308,24 @@ fn check(job: &CompareJob) -> Result<(), AppError> {
 /// not to warn.
 pub const BASELINE_NOISE_SHARE: f64 = 0.25;
 
+/// A render as `compare` writes it: the EXR with the channels the estimator reads, and the
+/// PNG preview at the common `exposure`.
+fn write_film(
+    exr: &Path,
+    png: &Path,
+    film: &crate::render::film::Film,
+    exposure: f32,
+) -> Result<(), AppError> {
+    let channels = film_channels(film);
+    let extra: Vec<(&str, &[f32])> = channels
+        .iter()
+        .map(|(n, v)| (n.as_str(), v.as_slice()))
+        .collect();
+    write_exr_with(exr, &film.image, &extra)?;
+    write_png(png, &film.image, exposure)?;
+    Ok(())
+}
+
 /// Runs the comparison into `job.out`.
 pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
     check(job)?;
@@ -326,22 +344,10 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
     // One exposure for all, so the sheet compares like with like.
     let (exposure, _) = png_exposure(job.scene.render.exposure, &runs[0].1.film.image);
     for (info, r) in &runs {
-        let channels = film_channels(&r.film);
-        let extra: Vec<(&str, &[f32])> = channels
-            .iter()
-            .map(|(n, v)| (n.as_str(), v.as_slice()))
-            .collect();
-        write_exr_with(&info.exr, &r.film.image, &extra)?;
-        write_png(&info.png, &r.film.image, exposure)?;
+        write_film(&info.exr, &info.png, &r.film, exposure)?;
     }
     if let Some((t, r)) = &truth {
-        let channels = film_channels(&r.film);
-        let extra: Vec<(&str, &[f32])> = channels
-            .iter()
-            .map(|(n, v)| (n.as_str(), v.as_slice()))
-            .collect();
-        write_exr_with(&t.exr, &r.film.image, &extra)?;
-        write_png(&t.exr.with_extension("png"), &r.film.image, exposure)?;
+        write_film(&t.exr, &t.exr.with_extension("png"), &r.film, exposure)?;
         let record = truth::TruthFile {
             scene: truth::scene(job),
             rows_deg: job.rows_deg,

@@ -86,6 +86,12 @@ pub fn run(job: &CompareJob, n: usize) -> Result<RealizationsSummary, AppError> 
             "pooling realizations needs at least 2 (--realizations {n}); one is a plain comparison"
         )));
     }
+    if job.truth_from.is_some() {
+        return Err(AppError::input(
+            "--truth-from reuses one sea's truth; --realizations renders several seas (each \
+             realization renders its own truth with --against truth)",
+        ));
+    }
     super::check(job)?;
     let t = Instant::now();
     let first = job.scene.render.ocean_seed;
@@ -260,5 +266,14 @@ mod tests {
         let e = run(&job, 1).unwrap_err();
         assert_eq!(e.exit_code(), 2, "{e}");
         assert!(e.to_string().contains("--realizations"), "{e}");
+        // and one sea's truth cannot serve several
+        let reused = CompareJob {
+            against: super::super::Against::Truth,
+            truth_from: Some(std::env::temp_dir()),
+            ..job
+        };
+        let e = run(&reused, 2).unwrap_err();
+        assert_eq!(e.exit_code(), 2, "{e}");
+        assert!(e.to_string().contains("--truth-from"), "{e}");
     }
 }
