@@ -86,10 +86,11 @@ pub fn run(job: &CompareJob, n: usize) -> Result<RealizationsSummary, AppError> 
             "pooling realizations needs at least 2 (--realizations {n}); one is a plain comparison"
         )));
     }
-    if job.truth_from.is_some() {
+    if job.against == super::Against::Truth {
         return Err(AppError::input(
-            "--truth-from reuses one sea's truth; --realizations renders several seas (each \
-             realization renders its own truth with --against truth)",
+            "--against truth and --truth-from measure one sea against its truth; --realizations \
+             pools several seas, and does not pool figures against a truth: run one comparison \
+             per ocean seed (render.ocean_seed) instead",
         ));
     }
     super::check(job)?;
@@ -274,6 +275,6 @@ mod tests {
         };
         let e = run(&reused, 2).unwrap_err();
         assert_eq!(e.exit_code(), 2, "{e}");
-        assert!(e.to_string().contains("--truth-from"), "{e}");
+        assert!(e.to_string().contains("--against truth"), "{e}");
     }
 }

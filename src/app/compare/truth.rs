@@ -94,15 +94,20 @@ pub struct TruthFile {
 }
 
 /// The scene the truth renders: the low tessellation's exact surface, geometric normals.
+/// (The policy is never consulted; it is pinned so that every truth of a scene is recorded
+/// alike.)
 pub(super) fn scene(job: &CompareJob) -> SceneConfig {
     let mut c = super::render::exact_scene(job);
     c.render.normals = NormalMode::Geometric;
+    c.render.wrong_side = Default::default();
     c
 }
 
-/// What of two truth scenes differs in a way that changes the converged image, by section;
-/// empty when nothing does. The sample seed, the wrong-side policy (never consulted), the
-/// threads and backend, and the tessellation (the prisms only bound the surface) do not.
+/// What of two truth scenes differs in a way that may change the converged image, by
+/// section; empty when nothing does. The sample seed, the wrong-side policy (never
+/// consulted), the threads, the backend and the preview's exposure do not. (The tessellation
+/// must match: where its triangles end is where the sea ends.) A sky map is compared by its
+/// path as given.
 fn differences(a: &SceneConfig, b: &SceneConfig) -> Vec<&'static str> {
     let normal = |c: &SceneConfig| {
         let mut c = c.clone();
@@ -110,13 +115,16 @@ fn differences(a: &SceneConfig, b: &SceneConfig) -> Vec<&'static str> {
         c.render.wrong_side = Default::default();
         c.render.threads = 0;
         c.render.backend = Default::default();
-        c.lod = Default::default();
+        c.render.exposure = None;
         c
     };
     let (a, b) = (normal(a), normal(b));
     let mut d = Vec::new();
-    if a.ocean != b.ocean {
-        d.push("[ocean]");
+    if a.ocean != b.ocean || a.render.ocean_seed != b.render.ocean_seed {
+        d.push("[ocean] (or render.ocean_seed)");
+    }
+    if a.lod != b.lod {
+        d.push("[lod]");
     }
     if a.sky != b.sky {
         d.push("[sky]");
@@ -124,10 +132,24 @@ fn differences(a: &SceneConfig, b: &SceneConfig) -> Vec<&'static str> {
     if a.camera != b.camera {
         d.push("[camera]");
     }
-    if a != b && d.is_empty() {
+    if a.water != b.water {
+        d.push("[water]");
+    }
+    let (mut ra, mut rb) = (a.render.clone(), b.render.clone());
+    ra.ocean_seed = 0;
+    rb.ocean_seed = 0;
+    if ra != rb {
         d.push("[render]");
     }
     d
+}
+
+/// A scene as a truth's record gives it back: through the JSON text (fields the record does
+/// not keep, such as whether the layers were chosen automatically, and floats read back from
+/// their text, compare alike).
+fn as_recorded(c: &SceneConfig) -> Result<SceneConfig, AppError> {
+    let text = serde_json::to_string(c).map_err(|e| AppError::Run(e.into()))?;
+    serde_json::from_str(&text).map_err(|e| AppError::Run(e.into()))
 }
 
 /// The truth an earlier comparison wrote into `dir`, checked against this job's scene and rows.
@@ -146,7 +168,7 @@ pub(super) fn load(job: &CompareJob, dir: &Path) -> Result<(Truth, Film), AppErr
             json.display()
         ))
     })?;
-    let d = differences(&file.scene, &scene(job));
+    let d = differences(&file.scene, &as_recorded(&scene(job))?);
     if !d.is_empty() {
         return Err(AppError::input(format!(
             "--truth-from {}: that truth was rendered for another scene (its {} differ)",
@@ -194,14 +216,16 @@ pub(super) fn load(job: &CompareJob, dir: &Path) -> Result<(Truth, Film), AppErr
 }
 
 /// The truth's samples per pixel, in multiples of the scene's spp: `job.truth_boost` times the
-/// scenarios' own (`boost`) on the analysed rows, none elsewhere.
+/// scenarios' own (`boost`) on the analysed rows (at most [`super::sampling::MAX_PIXEL_SAMPLES`]
+/// a pixel), none elsewhere.
 pub(super) fn boost_map(job: &CompareJob, boost: &[u16], camera: &Camera) -> Vec<u16> {
+    // no pixel past the sample cap the scenarios keep to
+    let cap = u32::from(super::sampling::boost_limit(job.scene.render.spp, u16::MAX));
     let mut out = vec![0u16; boost.len()];
     let w = camera.width;
     for y in camera.rows_between(job.rows_deg) {
         for x in y * w..(y + 1) * w {
-            out[x] =
-                (u32::from(boost[x]) * u32::from(job.truth_boost)).min(u32::from(u16::MAX)) as u16;
+            out[x] = (u32::from(boost[x]) * u32::from(job.truth_boost)).min(cap) as u16;
         }
     }
     out
@@ -301,6 +325,38 @@ pub(super) fn estimates(
 mod tests {
     use super::*;
     use crate::config::Projection;
+
+    #[test]
+    fn a_scene_matches_its_record_and_what_differs_is_named() {
+        let mut c = SceneConfig::default();
+        // not kept in the record, and a float whose shortest text is long
+        c.ocean.layers_auto = true;
+        c.ocean.wind_speed = 4.123_456_789_012_345;
+        let text = serde_json::to_string(&c).unwrap();
+        let recorded: SceneConfig = serde_json::from_str(&text).unwrap();
+        let against = |o: &SceneConfig| differences(&recorded, &as_recorded(o).unwrap());
+        assert!(against(&c).is_empty(), "{:?}", against(&c));
+        // what never changes the truth's converged image
+        let mut same = c.clone();
+        same.render.seed += 1;
+        same.render.wrong_side = crate::config::WrongSide::Mirror;
+        same.render.exposure = Some(1.0);
+        same.render.threads = 1;
+        assert!(against(&same).is_empty(), "{:?}", against(&same));
+        // what does, by section
+        let mut other = c.clone();
+        other.render.ocean_seed += 1;
+        assert_eq!(against(&other), ["[ocean] (or render.ocean_seed)"]);
+        let mut other = c.clone();
+        other.water.ior = 1.4;
+        assert_eq!(against(&other), ["[water]"]);
+        let mut other = c.clone();
+        other.lod.preset = crate::config::LodChoice::PaperHigh;
+        assert_eq!(against(&other), ["[lod]"]);
+        let mut other = c.clone();
+        other.render.max_segments -= 1;
+        assert_eq!(against(&other), ["[render]"]);
+    }
 
     #[test]
     fn the_truth_samples_the_analysed_rows_only_with_the_scenarios_boost_times_its_own() {
