@@ -573,3 +573,32 @@ fn exposure_scales_the_png_only() {
     assert!(err.contains("--exposure") && err.contains("stops"), "{err}");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn truth_flags_that_would_do_nothing_are_refused() {
+    let out = std::env::temp_dir().join("vastocean-truth-flags-refused");
+    let o = out.to_str().unwrap();
+    for (args, want) in [
+        (
+            vec!["compare", "--truth-boost", "8", "--out", o],
+            "--against truth",
+        ),
+        (
+            vec![
+                "compare",
+                "--truth-boost",
+                "8",
+                "--truth-from",
+                o,
+                "--out",
+                o,
+            ],
+            "keeps its own",
+        ),
+    ] {
+        let (code, _, err) = vastocean(&args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(err.contains(want), "{args:?}: {err}");
+    }
+    assert!(!out.join("summary.json").exists());
+}

@@ -359,13 +359,14 @@ pub struct CompareArgs {
     #[arg(long, value_parser = choice::<app::compare::Against>(), default_value = "paper-high")]
     pub against: app::compare::Against,
     /// The truth's samples per analysed pixel, in multiples of that pixel's samples in the
-    /// scenarios.
-    #[arg(long, default_value_t = app::compare::DEFAULT_TRUTH_BOOST, value_parser = clap::value_parser!(u16).range(1..=64))]
-    pub truth_boost: u16,
+    /// scenarios (default 4; with --against truth, for a truth rendered here).
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..=64))]
+    pub truth_boost: Option<u16>,
     /// Reuse the truth an earlier `compare --against truth` of the same scene wrote into DIR
     /// (truth.exr, truth.json) instead of rendering it again: no wrong-side policy touches the
     /// truth, so a sweep over --wrong-side renders it once. Implies --against truth; refused
-    /// when that truth's sea, sky, camera or rows differ.
+    /// when that truth's sea, tessellation, sky, camera, water, render settings or rows differ
+    /// (the sample seed, the policy, threads, backend and exposure may).
     #[arg(long, value_name = "DIR")]
     pub truth_from: Option<PathBuf>,
     /// Output folder.
@@ -383,6 +384,20 @@ impl CompareArgs {
     }
 
     pub fn job(&self) -> Result<app::compare::CompareJob> {
+        if self.truth_boost.is_some() {
+            if self.truth_from.is_some() {
+                return Err(BadInput(
+                    "--truth-boost sets the samples of a truth rendered here; a truth reused with --truth-from keeps its own".into(),
+                )
+                .into());
+            }
+            if self.against != app::compare::Against::Truth {
+                return Err(BadInput(
+                    "--truth-boost sets the truth's samples: it goes with --against truth".into(),
+                )
+                .into());
+            }
+        }
         let mut scene = self.scene.scene()?;
         let band = match (self.band, scene.camera.projection) {
             (Some(b), _) => b,
@@ -410,7 +425,9 @@ impl CompareArgs {
                 self.against
             },
             truth_from: self.truth_from.clone(),
-            truth_boost: self.truth_boost,
+            truth_boost: self
+                .truth_boost
+                .unwrap_or(app::compare::DEFAULT_TRUTH_BOOST),
             out: self.out.clone(),
             progress: true,
         })
