@@ -9,21 +9,142 @@
 //! smallest and largest of its four texels, so a box's bound covers the texels its reads touch.
 //! Each layer also keeps what a read can never exceed anywhere: the largest |Dx|, |Dz| and the
 //! steepest difference of h between neighbouring texels (the bilinear surface's slope bound).
+//! A second pyramid holds each block's steepest neighbour differences of h and of the
+//! displacement, so a box also has its own slope bound: the march's steps are certified by the
+//! slopes where the ray is, not by the steepest texel of the whole sea.
 
 use rayon::prelude::*;
 
 use crate::ocean::{Layer, Sampler, field};
 
-/// One layer's min/max pyramid of h: level `l` (from 1) holds, for each block of 2^l x 2^l
-/// texels, the smallest and largest h in it.
+/// What a pyramid keeps per block of texels, and how two blocks join.
+trait Block: Copy + Send + Sync {
+    fn join(self, o: Self) -> Self;
+}
+
+/// The smallest and largest h of a block.
+impl Block for [f32; 2] {
+    #[inline]
+    fn join(self, o: Self) -> Self {
+        [self[0].min(o[0]), self[1].max(o[1])]
+    }
+}
+
+/// The largest neighbour differences over dx that start at a block's texels: of h (per axis),
+/// and of the displacement on the strain's diagonal (dDx/dx, dDz/dz) and off it (dDx/dz,
+/// dDz/dx).
+#[derive(Clone, Copy, Debug, Default)]
+struct Steep {
+    slope: f32,
+    strain: [f32; 2],
+}
+
+impl Block for Steep {
+    #[inline]
+    fn join(self, o: Self) -> Self {
+        Steep {
+            slope: self.slope.max(o.slope),
+            strain: [
+                self.strain[0].max(o.strain[0]),
+                self.strain[1].max(o.strain[1]),
+            ],
+        }
+    }
+}
+
+/// A max-mipmap of one layer's blocks: level `l` (from 1) holds, for each block of 2^l x 2^l
+/// texels, the join of its texels.
+struct Levels<T> {
+    /// `levels[l - 1]`: (n >> l)^2 cells, z-major.
+    levels: Vec<Vec<T>>,
+    /// The whole layer's.
+    global: T,
+}
+
+impl<T: Block> Levels<T> {
+    fn new(level1: Vec<T>) -> Levels<T> {
+        let mut levels = vec![level1];
+        while levels.last().map_or(0, |l| l.len()) > 1 {
+            let prev = levels.last().expect("a level");
+            let side = (prev.len() as f64).sqrt() as usize;
+            let s = side / 2;
+            let next: Vec<T> = (0..s * s)
+                .into_par_iter()
+                .map(|c| {
+                    let (jx, jz) = (c % s, c / s);
+                    let at = |x: usize, z: usize| prev[z * side + x];
+                    (at(2 * jx, 2 * jz).join(at(2 * jx + 1, 2 * jz)))
+                        .join(at(2 * jx, 2 * jz + 1).join(at(2 * jx + 1, 2 * jz + 1)))
+                })
+                .collect();
+            levels.push(next);
+        }
+        let global = levels.last().expect("a level")[0];
+        Levels { levels, global }
+    }
+
+    /// The join over the blocks of `level` from (jx0, jz0) to (jx1, jz1) (at most two on each
+    /// axis, wrapping), or the whole layer's for level 0.
+    #[inline]
+    fn get(&self, (level, [jx0, jx1], [jz0, jz1]): Blocks) -> T {
+        if level == 0 {
+            return self.global;
+        }
+        let cells = &self.levels[level - 1];
+        let side = (cells.len() as f64).sqrt() as usize;
+        let mask = side as i64 - 1;
+        let at = |x: i64, z: i64| cells[(z & mask) as usize * side + (x & mask) as usize];
+        let mut b = at(jx0, jz0);
+        if jx1 != jx0 {
+            b = b.join(at(jx1, jz0));
+        }
+        if jz1 != jz0 {
+            b = b.join(at(jx0, jz1));
+            if jx1 != jx0 {
+                b = b.join(at(jx1, jz1));
+            }
+        }
+        b
+    }
+
+    fn bytes(&self) -> usize {
+        self.levels
+            .iter()
+            .map(|l| std::mem::size_of_val(l.as_slice()))
+            .sum()
+    }
+}
+
+/// A level and the first and last block on each axis.
+type Blocks = (usize, [i64; 2], [i64; 2]);
+
+/// One layer's pyramids of h's range and of its steepest differences.
 struct Pyramid {
     n: usize,
     inv_dx: f64,
     origin: [f64; 2],
-    /// `levels[l - 1]`: (n >> l)^2 cells, z-major.
-    levels: Vec<Vec<[f32; 2]>>,
-    /// The layer's smallest and largest h.
-    global: [f32; 2],
+    heights: Levels<[f32; 2]>,
+    steep: Levels<Steep>,
+}
+
+/// The layers' slope and strain bounds over a box of nominal positions, summed.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Steepness {
+    /// The sum of the layers' steepest neighbour differences of h over dx (per axis).
+    pub slope: f64,
+    /// The sum of the layers' strain bounds (largest diagonal plus largest off-diagonal).
+    pub strain: f64,
+}
+
+impl Steepness {
+    /// The steepest slope of the summed surface over the box, as a height over arc position
+    /// (as [`SurfaceBounds::slope_limit`], from the box's own texels); `None` where the strain
+    /// bound reaches 0.95. Every nominal position whose surface point lies over the box's arc
+    /// positions narrowed by the largest displacement lies in the box, and there the map
+    /// x -> x + D is one to one (its strain is below 1 on a convex set).
+    pub fn slope_limit(&self) -> Option<f64> {
+        (self.strain < 0.95).then(|| std::f64::consts::SQRT_2 * self.slope / (1.0 - self.strain))
+    }
 }
 
 /// What no read of one layer exceeds anywhere.
@@ -47,11 +168,6 @@ pub(super) struct SurfaceBounds {
     pub limits: Vec<LayerLimits>,
 }
 
-#[inline]
-fn join(a: [f32; 2], b: [f32; 2]) -> [f32; 2] {
-    [a[0].min(b[0]), a[1].max(b[1])]
-}
-
 impl Pyramid {
     fn new(layer: &Layer, origin: [f64; 2]) -> (Pyramid, LayerLimits) {
         let n = layer.n();
@@ -60,17 +176,16 @@ impl Pyramid {
         // level 1 straight from the texels, with the limits in the same pass
         let half = n / 2;
         let dx = layer.dx();
-        let rows: Vec<(Vec<[f32; 2]>, LayerLimits)> = (0..half)
+        let rows: Vec<(Vec<[f32; 2]>, Vec<Steep>, LayerLimits)> = (0..half)
             .into_par_iter()
             .map(|jz| {
-                let mut row = vec![[0.0f32; 2]; half];
+                let mut row = vec![[f32::INFINITY, f32::NEG_INFINITY]; half];
+                let mut steep_row = vec![Steep::default(); half];
                 let mut lim = LayerLimits::default();
-                for (jx, cell) in row.iter_mut().enumerate() {
-                    let mut b = [f32::INFINITY, f32::NEG_INFINITY];
+                for (jx, (cell, steep)) in row.iter_mut().zip(&mut steep_row).enumerate() {
                     for (ix, iz) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
                         let (x, z) = (2 * jx + ix, 2 * jz + iz);
                         let v = h(x, z);
-                        b = join(b, [v, v]);
                         let tx = &t[z * n + x];
                         let right = &t[z * n + (x + 1) % n];
                         let below = &t[((z + 1) % n) * n + x];
@@ -78,27 +193,37 @@ impl Pyramid {
                         lim.disp[0] = lim.disp[0].max(tx[field::DX].abs() as f64);
                         lim.disp[1] = lim.disp[1].max(tx[field::DZ].abs() as f64);
                         let dh = (right[field::H] - v).abs().max((below[field::H] - v).abs());
-                        lim.slope = lim.slope.max(dh as f64 / dx);
+                        let slope = dh as f64 / dx;
+                        lim.slope = lim.slope.max(slope);
                         let strain = [
                             (right[field::DX] - tx[field::DX]).abs(),
                             (below[field::DZ] - tx[field::DZ]).abs(),
                             (below[field::DX] - tx[field::DX])
                                 .abs()
                                 .max((right[field::DZ] - tx[field::DZ]).abs()),
-                        ];
+                        ]
+                        .map(|s| s as f64 / dx);
                         for (m, s) in lim.strain.iter_mut().zip(strain) {
-                            *m = m.max(s as f64 / dx);
+                            *m = m.max(s);
                         }
+                        // rounded up, so that the f32 block still bounds the f64 figure
+                        let up = |v: f64| (v * (1.0 + 1e-6)) as f32;
+                        *cell = cell.join([v, v]);
+                        *steep = steep.join(Steep {
+                            slope: up(slope),
+                            strain: [up(strain[0].max(strain[1])), up(strain[2])],
+                        });
                     }
-                    *cell = b;
                 }
-                (row, lim)
+                (row, steep_row, lim)
             })
             .collect();
         let mut limits = LayerLimits::default();
         let mut level1 = Vec::with_capacity(half * half);
-        for (row, l) in rows {
+        let mut steep1 = Vec::with_capacity(half * half);
+        for (row, steep_row, l) in rows {
             level1.extend(row);
+            steep1.extend(steep_row);
             limits.height = limits.height.max(l.height);
             limits.slope = limits.slope.max(l.slope);
             for k in 0..3 {
@@ -108,41 +233,22 @@ impl Pyramid {
                 limits.disp[k] = limits.disp[k].max(l.disp[k]);
             }
         }
-        let mut levels = vec![level1];
-        while levels.last().map_or(0, |l| l.len()) > 1 {
-            let prev = levels.last().expect("a level");
-            let side = (prev.len() as f64).sqrt() as usize;
-            let s = side / 2;
-            let next: Vec<[f32; 2]> = (0..s * s)
-                .into_par_iter()
-                .map(|c| {
-                    let (jx, jz) = (c % s, c / s);
-                    let at = |x: usize, z: usize| prev[z * side + x];
-                    join(
-                        join(at(2 * jx, 2 * jz), at(2 * jx + 1, 2 * jz)),
-                        join(at(2 * jx, 2 * jz + 1), at(2 * jx + 1, 2 * jz + 1)),
-                    )
-                })
-                .collect();
-            levels.push(next);
-        }
-        let global = levels.last().expect("a level")[0];
         (
             Pyramid {
                 n,
                 inv_dx: layer.inv_dx(),
                 origin,
-                levels,
-                global,
+                heights: Levels::new(level1),
+                steep: Levels::new(steep1),
             },
             limits,
         )
     }
 
-    /// The smallest and largest h any bilinear read at nominal positions in
-    /// `[x0, x1] x [z0, z1]` returns.
+    /// The blocks holding every texel a bilinear read at nominal positions in
+    /// `[x0, x1] x [z0, z1]` touches (level 0: the whole layer).
     #[inline]
-    fn query(&self, x0: f64, x1: f64, z0: f64, z1: f64) -> [f32; 2] {
+    fn blocks(&self, x0: f64, x1: f64, z0: f64, z1: f64) -> Blocks {
         // the texels the reads touch: floor(p0) ..= floor(p1) + 1 on each axis
         let ix0 = (self.origin[0] + x0 * self.inv_dx).floor();
         let ix1 = (self.origin[0] + x1 * self.inv_dx).floor() + 1.0;
@@ -150,28 +256,16 @@ impl Pyramid {
         let iz1 = (self.origin[1] + z1 * self.inv_dx).floor() + 1.0;
         let span = (ix1 - ix0).max(iz1 - iz0) + 1.0;
         if span.is_nan() || span >= (self.n / 2) as f64 {
-            return self.global;
+            return (0, [0; 2], [0; 2]);
         }
         // the smallest level whose blocks are at least `span` texels: the range then meets at
         // most two blocks on each axis
         let level = (span as u64).next_power_of_two().trailing_zeros().max(1) as usize;
-        let cells = &self.levels[level - 1];
-        let side = self.n >> level;
-        let mask = side as i64 - 1;
-        let (jx0, jx1) = ((ix0 as i64) >> level, (ix1 as i64) >> level);
-        let (jz0, jz1) = ((iz0 as i64) >> level, (iz1 as i64) >> level);
-        let at = |x: i64, z: i64| cells[(z & mask) as usize * side + (x & mask) as usize];
-        let mut b = at(jx0, jz0);
-        if jx1 != jx0 {
-            b = join(b, at(jx1, jz0));
-        }
-        if jz1 != jz0 {
-            b = join(b, at(jx0, jz1));
-            if jx1 != jx0 {
-                b = join(b, at(jx1, jz1));
-            }
-        }
-        b
+        (
+            level,
+            [(ix0 as i64) >> level, (ix1 as i64) >> level],
+            [(iz0 as i64) >> level, (iz1 as i64) >> level],
+        )
     }
 }
 
@@ -193,7 +287,7 @@ impl SurfaceBounds {
     pub fn height(&self, x0: f64, x1: f64, z0: f64, z1: f64) -> [f64; 2] {
         let (mut b, mut size) = ([0.0f64; 2], 1e-3);
         for p in &self.pyramids {
-            let q = p.query(x0, x1, z0, z1);
+            let q = p.heights.get(p.blocks(x0, x1, z0, z1));
             b[0] += q[0] as f64;
             b[1] += q[1] as f64;
             size += (q[0].abs().max(q[1].abs())) as f64;
@@ -202,6 +296,20 @@ impl SurfaceBounds {
         // sum by a few ulps of each layer's value (layers can cancel, so not of the sum's)
         let slack = 1e-6 * size;
         [b[0] - slack, b[1] + slack]
+    }
+
+    /// The layers' summed slope and strain bounds over nominal positions
+    /// `[x0, x1] x [z0, z1]`.
+    #[inline]
+    pub fn steepness(&self, x0: f64, x1: f64, z0: f64, z1: f64) -> Steepness {
+        let (mut slope, mut strain) = (0.0, 0.0);
+        for p in &self.pyramids {
+            let q = p.steep.get(p.blocks(x0, x1, z0, z1));
+            // each layer's Gershgorin norm; their sum bounds the summed strain's
+            slope += q.slope as f64;
+            strain += q.strain[0] as f64 + q.strain[1] as f64;
+        }
+        Steepness { slope, strain }
     }
 
     /// Largest |Dx| and |Dz| of the summed surface, m.
@@ -235,8 +343,7 @@ impl SurfaceBounds {
     pub fn bytes(&self) -> usize {
         self.pyramids
             .iter()
-            .flat_map(|p| &p.levels)
-            .map(|l| std::mem::size_of_val(l.as_slice()))
+            .map(|p| p.heights.bytes() + p.steep.bytes())
             .sum()
     }
 }

@@ -98,7 +98,8 @@ impl ExactSurface {
         while sp > 0 {
             sp -= 1;
             let (a, b, depth) = stack[sp];
-            if self.clears(&ray, &a, &b) {
+            let area = self.nominal_box(&ray, &a, &b);
+            if self.clears(&ray, &a, &b, area) {
                 continue;
             }
             let ds = (b.s[0] - a.s[0]).hypot(b.s[1] - a.s[1]);
@@ -117,7 +118,14 @@ impl ExactSurface {
                 return Some((t_prev, e_prev.x));
             }
             let theta = a.s[0].hypot(a.s[1]).max(b.s[0].hypot(b.s[1])) / r;
-            match self.march(&mut ray, t_prev, e_prev, b.t, theta) {
+            // the steepest slope over the segment's own boxes, or the sea's, if smaller
+            let [x0, x1, z0, z1] = area;
+            let local = self.bounds.steepness(x0, x1, z0, z1);
+            let slope = match (local.slope_limit(), self.slope) {
+                (Some(l), Some(g)) => Some(l.min(g)),
+                (l, g) => l.or(g),
+            };
+            match self.march(&mut ray, t_prev, e_prev, b.t, theta, slope) {
                 Ok(hit) => return Some(hit),
                 // no crossing up to b: the next segment starts on the same side
                 Err(at_b) => side = Some((b.t, at_b)),
@@ -126,10 +134,10 @@ impl ExactSurface {
         None
     }
 
-    /// Whether the ray's altitude over `[a.t, b.t]` stays clear of the surface's range over
-    /// the arc positions it passes.
+    /// The nominal positions `[x0, x1, z0, z1]` whose surface points may lie over the arc
+    /// positions the ray passes in `[a.t, b.t]`.
     #[inline]
-    fn clears(&self, ray: &RayPath, a: &End, b: &End) -> bool {
+    fn nominal_box(&self, ray: &RayPath, a: &End, b: &End) -> [f64; 4] {
         let len = (b.t - a.t) * ray.len;
         let far = a.s[0].hypot(a.s[1]).max(b.s[0].hypot(b.s[1])) + len;
         let theta = far / self.earth_radius_m;
@@ -140,10 +148,18 @@ impl ExactSurface {
         let slack = 1e-4
             + len * len * far / (self.earth_radius_m * self.earth_radius_m)
             + dx.max(dz) * theta * theta;
-        let x0 = a.s[0].min(b.s[0]) - slack - dx;
-        let x1 = a.s[0].max(b.s[0]) + slack + dx;
-        let z0 = a.s[1].min(b.s[1]) - slack - dz;
-        let z1 = a.s[1].max(b.s[1]) + slack + dz;
+        [
+            a.s[0].min(b.s[0]) - slack - dx,
+            a.s[0].max(b.s[0]) + slack + dx,
+            a.s[1].min(b.s[1]) - slack - dz,
+            a.s[1].max(b.s[1]) + slack + dz,
+        ]
+    }
+
+    /// Whether the ray's altitude over `[a.t, b.t]` stays clear of the surface's range over
+    /// the nominal positions `area` ([`Self::nominal_box`]).
+    #[inline]
+    fn clears(&self, ray: &RayPath, a: &End, b: &End, [x0, x1, z0, z1]: [f64; 4]) -> bool {
         let [lo, hi] = self.bounds.height(x0, x1, z0, z1);
         let hi = hi + self.altitude_slack;
         let ray_hi = a.a.max(b.a);
@@ -158,8 +174,9 @@ impl ExactSurface {
         ray_lo > hi
     }
 
-    /// Marches from `t` (where F is `e`) to `t_end`, at most `theta` radians from the nadir:
-    /// the first crossing, or F at `t_end`.
+    /// Marches from `t` (where F is `e`) to `t_end`, at most `theta` radians from the nadir,
+    /// over a surface whose slope (height over arc position) is at most `slope` there: the
+    /// first crossing, or F at `t_end`.
     fn march(
         &self,
         ray: &mut RayPath,
@@ -167,6 +184,7 @@ impl ExactSurface {
         mut e: Eval,
         t_end: f64,
         theta: f64,
+        slope: Option<f64>,
     ) -> Result<(f64, [f64; 2]), Eval> {
         let floor = self.floor_m / ray.len;
         // |dF/dt| <= |da/dt| + slope |ds/dt|: the altitude and the arc position move with the
@@ -174,9 +192,7 @@ impl ExactSurface {
         // the nadir (sin theta, with room for the segment's own reach)
         let (dv, dh) = (ray.d[1].abs(), ray.d[0].hypot(ray.d[2]));
         let leak = 1.01 * theta + 1e-3;
-        let k = self
-            .slope
-            .map(|s| 1.01 * (dv + leak * dh + s * (dh + leak * dv)) + 1e-9);
+        let k = slope.map(|s| 1.01 * (dv + leak * dh + s * (dh + leak * dv)) + 1e-9);
         while t < t_end {
             // (F is known to a tenth of itself while it is far from zero; an inversion that did
             // not converge certifies nothing)

@@ -77,6 +77,59 @@ fn pyramid_bounds_hold_every_read_and_narrow_with_the_box() {
     );
 }
 
+/// A box's own slope and strain bounds hold every secant of the bilinear surface inside it
+/// (a secant is a mean of the derivative between its ends), and on boxes of centimetres to a
+/// few metres they are well below the whole sea's.
+#[test]
+fn local_slope_and_strain_bounds_hold_every_secant_in_the_box() {
+    let ocean = sea(1.0);
+    let origin = [1234.5, -987.25];
+    let sampler = ocean.sampler(origin);
+    let b = SurfaceBounds::new(&sampler);
+    let global = b.steepness(-1e6, 1e6, -1e6, 1e6);
+    let global_limit = b.slope_limit().expect("the test sea has a slope bound");
+    // summed per layer, the strain's Gershgorin bound is never tighter than the sea's own
+    assert!(global.slope_limit().expect("bounded") >= global_limit);
+    let mut rng = Rng::keyed(&[4]);
+    let mut lower = 0;
+    const EPS: f64 = 1e-3;
+    for _ in 0..300 {
+        let (x0, z0) = (rng.f64() * 600.0 - 300.0, rng.f64() * 600.0 - 300.0);
+        let size = 0.01 * 300f64.powf(rng.f64()); // 1 cm to 3 m
+        let (x1, z1) = (x0 + size, z0 + size);
+        let local = b.steepness(x0, x1, z0, z1);
+        assert!(local.slope <= global.slope && local.strain <= global.strain);
+        let limit = local
+            .slope_limit()
+            .expect("the test sea's strain is below 0.95");
+        lower += usize::from(limit < 0.5 * global_limit);
+        for _ in 0..40 {
+            let x = x0 + (x1 - x0 - EPS) * rng.f64();
+            let z = z0 + (z1 - z0 - EPS) * rng.f64();
+            let f = |x: f64, z: f64| sampler.fields_f64(x, z).map(|v| v as f64);
+            let (c, right, below) = (f(x, z), f(x + EPS, z), f(x, z + EPS));
+            let d = |a: &[f64; crate::ocean::FIELD_COUNT], k: usize| (a[k] - c[k]) / EPS;
+            let (hx, hz) = (d(&right, field::H), d(&below, field::H));
+            // f32 texels: differences over 1 mm carry their rounding, ~1e-7 m / 1e-3 m
+            let tol = 1e-2;
+            assert!(
+                hx.abs().max(hz.abs()) <= local.slope + tol,
+                "{hx} {hz} {local:?}"
+            );
+            let s = [
+                [d(&right, field::DX), d(&below, field::DX)],
+                [d(&right, field::DZ), d(&below, field::DZ)],
+            ];
+            let rows = (s[0][0].abs() + s[0][1].abs()).max(s[1][0].abs() + s[1][1].abs());
+            assert!(rows <= local.strain + tol, "{s:?} {local:?}");
+        }
+    }
+    assert!(
+        lower > 150,
+        "{lower} of 300 boxes' slope bounds below half the sea's ({global_limit})"
+    );
+}
+
 #[test]
 fn implicit_function_is_the_signed_altitude_above_the_surface() {
     for chop in [0.0, 1.0] {
