@@ -127,3 +127,19 @@ fn the_matrix_runs_on_the_exact_surface() {
     assert!(get("furnace").max_luminance <= 1.0001 && get("furnace").max_luminance > 0.01);
     let _ = std::fs::remove_dir_all(out("exact"));
 }
+
+/// Rays leaving exact hits tens of kilometres from a camera 10 km up clear the surface: the
+/// cell at its own size (smaller images miss the two paths that met it again when the offset
+/// trusted the normal from the f32 nominal position).
+#[test]
+fn rays_leaving_far_exact_hits_do_not_meet_the_surface_again() {
+    let mut job = StressJob::quick(out("exact-far"));
+    job.on_exact_surface();
+    job.select(&["height-10000".into()]).unwrap();
+    let r = run(&job).unwrap();
+    assert_eq!(r.failed, 0, "{r}");
+    let cell = r.results.iter().find(|c| c.name == "height-10000").unwrap();
+    assert_eq!(cell.self_hits, 0, "{r}");
+    assert_eq!(cell.nan_samples, 0, "{r}");
+    let _ = std::fs::remove_dir_all(out("exact-far"));
+}
