@@ -52,6 +52,23 @@ impl Block for Steep {
     }
 }
 
+/// The smallest and largest Dx and Dz of a block: `[Dx min, Dx max, Dz min, Dz max]`.
+#[derive(Clone, Copy, Debug)]
+struct Disp([f32; 4]);
+
+impl Block for Disp {
+    #[inline]
+    fn join(self, o: Self) -> Self {
+        let (a, b) = (self.0, o.0);
+        Disp([
+            a[0].min(b[0]),
+            a[1].max(b[1]),
+            a[2].min(b[2]),
+            a[3].max(b[3]),
+        ])
+    }
+}
+
 /// A max-mipmap of one layer's blocks: level `l` (from 1) holds, for each block of 2^l x 2^l
 /// texels, the join of its texels.
 struct Levels<T> {
@@ -125,6 +142,7 @@ struct Pyramid {
     origin: [f64; 2],
     heights: Levels<[f32; 2]>,
     steep: Levels<Steep>,
+    disp: Levels<Disp>,
 }
 
 /// The layers' slope and strain bounds over a box of nominal positions, summed.
@@ -176,13 +194,17 @@ impl Pyramid {
         // level 1 straight from the texels, with the limits in the same pass
         let half = n / 2;
         let dx = layer.dx();
-        let rows: Vec<(Vec<[f32; 2]>, Vec<Steep>, LayerLimits)> = (0..half)
+        type Row = (Vec<[f32; 2]>, Vec<Steep>, Vec<Disp>, LayerLimits);
+        let rows: Vec<Row> = (0..half)
             .into_par_iter()
             .map(|jz| {
-                let mut row = vec![[f32::INFINITY, f32::NEG_INFINITY]; half];
+                let (inf, ninf) = (f32::INFINITY, f32::NEG_INFINITY);
+                let mut row = vec![[inf, ninf]; half];
                 let mut steep_row = vec![Steep::default(); half];
+                let mut disp_row = vec![Disp([inf, ninf, inf, ninf]); half];
                 let mut lim = LayerLimits::default();
-                for (jx, (cell, steep)) in row.iter_mut().zip(&mut steep_row).enumerate() {
+                let cells = row.iter_mut().zip(&mut steep_row).zip(&mut disp_row);
+                for (jx, ((cell, steep), disp)) in cells.enumerate() {
                     for (ix, iz) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
                         let (x, z) = (2 * jx + ix, 2 * jz + iz);
                         let v = h(x, z);
@@ -209,21 +231,25 @@ impl Pyramid {
                         // rounded up, so that the f32 block still bounds the f64 figure
                         let up = |v: f64| (v * (1.0 + 1e-6)) as f32;
                         *cell = cell.join([v, v]);
+                        let (ddx, ddz) = (tx[field::DX], tx[field::DZ]);
+                        *disp = disp.join(Disp([ddx, ddx, ddz, ddz]));
                         *steep = steep.join(Steep {
                             slope: up(slope),
                             strain: [up(strain[0].max(strain[1])), up(strain[2])],
                         });
                     }
                 }
-                (row, steep_row, lim)
+                (row, steep_row, disp_row, lim)
             })
             .collect();
         let mut limits = LayerLimits::default();
         let mut level1 = Vec::with_capacity(half * half);
         let mut steep1 = Vec::with_capacity(half * half);
-        for (row, steep_row, l) in rows {
+        let mut disp1 = Vec::with_capacity(half * half);
+        for (row, steep_row, disp_row, l) in rows {
             level1.extend(row);
             steep1.extend(steep_row);
+            disp1.extend(disp_row);
             limits.height = limits.height.max(l.height);
             limits.slope = limits.slope.max(l.slope);
             for k in 0..3 {
@@ -240,6 +266,7 @@ impl Pyramid {
                 origin,
                 heights: Levels::new(level1),
                 steep: Levels::new(steep1),
+                disp: Levels::new(disp1),
             },
             limits,
         )
@@ -312,6 +339,23 @@ impl SurfaceBounds {
         Steepness { slope, strain }
     }
 
+    /// The smallest and largest summed Dx and Dz over nominal positions `[x0, x1] x [z0, z1]`,
+    /// m: `[Dx min, Dx max, Dz min, Dz max]`.
+    #[inline]
+    pub fn displacement(&self, x0: f64, x1: f64, z0: f64, z1: f64) -> [f64; 4] {
+        let (mut b, mut size) = ([0.0f64; 4], 1e-3);
+        for p in &self.pyramids {
+            let q = p.disp.get(p.blocks(x0, x1, z0, z1)).0;
+            for (s, v) in b.iter_mut().zip(q) {
+                *s += v as f64;
+            }
+            size += q.iter().fold(0.0f32, |m, v| m.max(v.abs())) as f64;
+        }
+        // (the reads' f32 rounding, as for h)
+        let slack = 1e-6 * size;
+        [b[0] - slack, b[1] + slack, b[2] - slack, b[3] + slack]
+    }
+
     /// Largest |Dx| and |Dz| of the summed surface, m.
     pub fn disp(&self) -> [f64; 2] {
         let mut d = [0.0; 2];
@@ -343,7 +387,7 @@ impl SurfaceBounds {
     pub fn bytes(&self) -> usize {
         self.pyramids
             .iter()
-            .map(|p| p.heights.bytes() + p.steep.bytes())
+            .map(|p| p.heights.bytes() + p.steep.bytes() + p.disp.bytes())
             .sum()
     }
 }

@@ -49,8 +49,11 @@ pub struct ExactSurface {
     /// The surface's slope bound (height over arc position), if the strain bound proves one.
     slope: Option<f64>,
     /// Segments are halved down to this length (arc), m: below the widening by the
-    /// displacement, the bounds do not narrow.
+    /// displacement, the bounds narrow slowly.
     split_m: f64,
+    /// ... and, where no slope bound certifies a march, down to this: eight of the finest
+    /// layer's texels.
+    split_rough_m: f64,
     /// The shortest step of the march, m: half the finest layer's texel.
     floor_m: f64,
 }
@@ -82,6 +85,7 @@ impl ExactSurface {
             altitude_slack: (disp[0] * disp[0] + disp[1] * disp[1]) / earth_radius_m + 1e-6,
             slope: bounds.slope_limit(),
             split_m: disp[0].max(disp[1]).max(8.0 * finest),
+            split_rough_m: 8.0 * finest,
             floor_m: 0.5 * finest,
             ocean,
             origin,

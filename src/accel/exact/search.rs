@@ -22,6 +22,9 @@ use super::implicit::{Eval, Implicit, Warm, sphere_coords};
 pub(super) const TOL_F: f64 = 2e-7;
 /// Most halvings of one ray's segment before it is marched whatever its length.
 const MAX_DEPTH: u32 = 40;
+/// How often a segment's box of nominal positions is narrowed by the displacement's range
+/// over it ([`ExactSurface::nominal_box`]).
+const NARROWINGS: usize = 2;
 
 /// One end of a segment: its t, arc position and altitude.
 #[derive(Clone, Copy)]
@@ -102,8 +105,22 @@ impl ExactSurface {
             if self.clears(&ray, &a, &b, area) {
                 continue;
             }
+            // Halved down to the displacement's length, below which the box barely narrows;
+            // further, down to eight of the finest texels, where no slope bound certifies a
+            // march over it (only the bounds can skip ground there)
+            let [x0, x1, z0, z1] = area;
+            let local = self.bounds.steepness(x0, x1, z0, z1);
+            let slope = match (local.slope_limit(), self.slope) {
+                (Some(l), Some(g)) => Some(l.min(g)),
+                (l, g) => l.or(g),
+            };
             let ds = (b.s[0] - a.s[0]).hypot(b.s[1] - a.s[1]);
-            if ds > self.split_m && depth < MAX_DEPTH {
+            let split = if slope.is_some() {
+                self.split_m
+            } else {
+                self.split_rough_m
+            };
+            if ds > split && depth < MAX_DEPTH {
                 let m = ray.end(0.5 * (a.t + b.t));
                 stack[sp] = (m, b, depth + 1);
                 stack[sp + 1] = (a, m, depth + 1);
@@ -118,13 +135,6 @@ impl ExactSurface {
                 return Some((t_prev, e_prev.x));
             }
             let theta = a.s[0].hypot(a.s[1]).max(b.s[0].hypot(b.s[1])) / r;
-            // the steepest slope over the segment's own boxes, or the sea's, if smaller
-            let [x0, x1, z0, z1] = area;
-            let local = self.bounds.steepness(x0, x1, z0, z1);
-            let slope = match (local.slope_limit(), self.slope) {
-                (Some(l), Some(g)) => Some(l.min(g)),
-                (l, g) => l.or(g),
-            };
             match self.march(&mut ray, t_prev, e_prev, b.t, theta, slope) {
                 Ok(hit) => return Some(hit),
                 // no crossing up to b: the next segment starts on the same side
@@ -148,12 +158,27 @@ impl ExactSurface {
         let slack = 1e-4
             + len * len * far / (self.earth_radius_m * self.earth_radius_m)
             + dx.max(dz) * theta * theta;
-        [
-            a.s[0].min(b.s[0]) - slack - dx,
-            a.s[0].max(b.s[0]) + slack + dx,
-            a.s[1].min(b.s[1]) - slack - dz,
-            a.s[1].max(b.s[1]) + slack + dz,
-        ]
+        let s = [
+            a.s[0].min(b.s[0]) - slack,
+            a.s[0].max(b.s[0]) + slack,
+            a.s[1].min(b.s[1]) - slack,
+            a.s[1].max(b.s[1]) + slack,
+        ];
+        // x = s - D(x): x lies within the largest displacement of s, and then within the
+        // displacement's own range over that box, which is narrower wherever the longer
+        // waves (most of the displacement) change little across it
+        let mut area = [s[0] - dx, s[1] + dx, s[2] - dz, s[3] + dz];
+        for _ in 0..NARROWINGS {
+            let [x0, x1, z0, z1] = area;
+            let d = self.bounds.displacement(x0, x1, z0, z1);
+            area = [
+                x0.max(s[0] - d[1]),
+                x1.min(s[1] - d[0]),
+                z0.max(s[2] - d[3]),
+                z1.min(s[3] - d[2]),
+            ];
+        }
+        area
     }
 
     /// Whether the ray's altitude over `[a.t, b.t]` stays clear of the surface's range over

@@ -48,6 +48,7 @@ fn coarse_mesh(ocean: &Surface, origin: [f64; 2]) -> Mesh {
     tessellate(&params, &ocean.sampler(origin)).unwrap().0
 }
 
+/// Every read's h and displacement lie within its box's ranges, which narrow with the box.
 #[test]
 fn pyramid_bounds_hold_every_read_and_narrow_with_the_box() {
     let ocean = sea(1.0);
@@ -56,7 +57,7 @@ fn pyramid_bounds_hold_every_read_and_narrow_with_the_box() {
     let b = SurfaceBounds::new(&sampler);
     let global = b.height(-1e6, 1e6, -1e6, 1e6);
     let mut rng = Rng::keyed(&[3]);
-    let mut narrower = 0;
+    let (mut narrower, mut narrower_d) = (0, 0);
     for _ in 0..400 {
         let (x0, z0) = (rng.f64() * 600.0 - 300.0, rng.f64() * 600.0 - 300.0);
         let size = 0.01 * 1e4f64.powf(rng.f64()); // 1 cm to 100 m
@@ -64,16 +65,36 @@ fn pyramid_bounds_hold_every_read_and_narrow_with_the_box() {
         let [lo, hi] = b.height(x0, x1, z0, z1);
         assert!(lo >= global[0] && hi <= global[1]);
         narrower += usize::from(hi - lo < 0.5 * (global[1] - global[0]));
+        let d = b.displacement(x0, x1, z0, z1);
+        let [dx, dz] = b.disp();
+        assert!(d[0] >= -dx - 1e-6 && d[1] <= dx + 1e-6, "{d:?} {dx}");
+        assert!(d[2] >= -dz - 1e-6 && d[3] <= dz + 1e-6, "{d:?} {dz}");
+        narrower_d += usize::from(d[1] - d[0] < dx);
         for _ in 0..50 {
             let (x, z) = (x0 + (x1 - x0) * rng.f64(), z0 + (z1 - z0) * rng.f64());
-            let h = sampler.fields_f64(x, z)[field::H] as f64;
+            let f = sampler.fields_f64(x, z);
+            let h = f[field::H] as f64;
             assert!(lo <= h && h <= hi, "{h} outside [{lo}, {hi}] at ({x}, {z})");
+            let (fx, fz) = (f[field::DX] as f64, f[field::DZ] as f64);
+            assert!(
+                d[0] <= fx && fx <= d[1],
+                "Dx {fx} outside {d:?} at ({x}, {z})"
+            );
+            assert!(
+                d[2] <= fz && fz <= d[3],
+                "Dz {fz} outside {d:?} at ({x}, {z})"
+            );
         }
     }
     // boxes of centimetres to metres are far narrower than the whole sea's range
     assert!(
         narrower > 200,
         "{narrower} of 400 boxes narrower than half the range"
+    );
+    // and their displacement ranges narrower than half the largest |Dx| on either side
+    assert!(
+        narrower_d > 200,
+        "{narrower_d} of 400 boxes with a Dx range under the largest |Dx|"
     );
 }
 
