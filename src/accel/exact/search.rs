@@ -5,11 +5,13 @@
 //! above the largest surface altitude over the arc positions it passes (or below the
 //! smallest): the ray's altitude is convex in t (a distance from the sphere's centre), so its
 //! range is its end values and its closest approach; the surface's range is the layers'
-//! pyramids over the segment's arc positions widened by the largest horizontal displacement
-//! (x = s - D). Segments that are not cleared are halved until they are shorter than
-//! [`ExactSurface::split_m`], then marched: from a point where F = f, the surface cannot be
-//! reached before |f| / K, K = (1 + slope bound) |d| bounding dF/dt, so that step is taken
-//! when it is longer than the floor (half the finest texel), and the floor otherwise. The
+//! pyramids over the nominal positions x = s - D(x) of the segment's arc positions s (the box
+//! [`ExactSurface::nominal_box`]). Segments that are not cleared are halved until they are
+//! shorter than [`ExactSurface::split_m`] (or, where no slope bound holds over their box,
+//! [`ExactSurface::split_rough_m`]), then marched: from a point where F = f, the surface
+//! cannot be reached before |f| / K, K = (1 + slope bound over the box) |d| bounding dF/dt, so
+//! that step is taken when it is longer than the floor (half the finest texel), and the
+//! floor otherwise. The
 //! floor is what the march does not certify: a crest the ray clips over less than the floor
 //! (both crossings between two points) is not seen. A sign change brackets a root, which the
 //! Illinois variant of false position narrows to [`TOL_F`].
