@@ -71,9 +71,10 @@ pub(super) fn exact_surface_point(
         ng: normal.normalize_or(Vec3::Y),
         // The normal comes from the hit's nominal position in f32 texture coordinates
         // (centimetres off at tens of kilometres, across the bilinear surface's kinks), so
-        // the offset does not trust its orientation: the error is spread to every axis, which
-        // clears any plane through the point. (Along the reported normal alone, rays leaving
-        // hits 45 km from a camera 10 km up met the surface again.)
+        // the offset does not rely on its orientation: the error's whole length on every
+        // axis, at least that length along the normal, a margin rather than pbrt's
+        // projection. (With the projection, rays leaving hits 45 km from a camera 10 km up met
+        // the surface again; half a millimetre more cleared them.)
         err: Vec3::splat(err.length()),
         prim: hit.prim,
     }

@@ -11,7 +11,9 @@
 //! steepest difference of h between neighbouring texels (the bilinear surface's slope bound).
 //! A second pyramid holds each block's steepest neighbour differences of h and of the
 //! displacement, so a box also has its own slope bound: the march's steps are certified by the
-//! slopes where the ray is, not by the steepest texel of the whole sea.
+//! slopes where the ray is, not by the steepest texel of the whole sea. A third holds each
+//! block's smallest and largest Dx and Dz, which narrow the box of nominal positions a stretch
+//! of the ray can meet (x = s - D(x)) from the sea's largest displacement to the box's own.
 
 use rayon::prelude::*;
 
@@ -135,7 +137,7 @@ impl<T: Block> Levels<T> {
 /// A level and the first and last block on each axis.
 type Blocks = (usize, [i64; 2], [i64; 2]);
 
-/// One layer's pyramids of h's range and of its steepest differences.
+/// One layer's pyramids: h's range, the steepest differences, and the displacement's range.
 struct Pyramid {
     n: usize,
     inv_dx: f64,
@@ -157,8 +159,8 @@ pub(super) struct Steepness {
 impl Steepness {
     /// The steepest slope of the summed surface over the box, as a height over arc position
     /// (as [`SurfaceBounds::slope_limit`], from the box's own texels); `None` where the strain
-    /// bound reaches 0.95. Every nominal position whose surface point lies over the box's arc
-    /// positions narrowed by the largest displacement lies in the box, and there the map
+    /// bound reaches 0.95. The box is to hold every nominal position whose surface point lies
+    /// over the arc positions in question (the search's `nominal_box`), and there the map
     /// x -> x + D is one to one (its strain is below 1 on a convex set).
     pub fn slope_limit(&self) -> Option<f64> {
         (self.strain < 0.95).then(|| std::f64::consts::SQRT_2 * self.slope / (1.0 - self.strain))
@@ -389,5 +391,91 @@ impl SurfaceBounds {
             .iter()
             .map(|p| p.heights.bytes() + p.steep.bytes() + p.disp.bytes())
             .sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ocean::{LayerSpec, OceanParams, Surface};
+    use crate::rng::Rng;
+
+    /// Each layer's pyramid queries against the texels a box's reads touch, counted one by
+    /// one: every block value holds them (h's and D's ranges, the steepest differences that
+    /// start at them), and is no looser than the texels of the blocks it joins.
+    #[test]
+    fn every_query_holds_the_texels_of_its_box_one_by_one() {
+        let p = OceanParams {
+            layers: vec![
+                LayerSpec {
+                    size_m: 200.0,
+                    n: 128,
+                },
+                LayerSpec {
+                    size_m: 23.7,
+                    n: 64,
+                },
+            ],
+            choppiness: 1.0,
+            ..OceanParams::default()
+        };
+        let ocean = Surface::new(&p, 5).unwrap();
+        let sampler = ocean.sampler([321.0, -45.5]);
+        let mut rng = Rng::keyed(&[6]);
+        for (layer, &origin) in sampler.layers().iter().zip(sampler.grid_origins()) {
+            let (pyramid, _) = Pyramid::new(layer, origin);
+            let (n, t, dx) = (layer.n() as i64, layer.fields(), layer.dx());
+            let at = |x: i64, z: i64| &t[(z.rem_euclid(n) * n + x.rem_euclid(n)) as usize];
+            for _ in 0..300 {
+                let size = layer.dx() * 0.3 * 40f64.powf(rng.f64());
+                let (x0, z0) = (rng.f64() * 400.0 - 200.0, rng.f64() * 400.0 - 200.0);
+                let (x1, z1) = (x0 + size, z0 + size * rng.f64());
+                let texel = |v: f64, o: f64| (o + v * layer.inv_dx()).floor() as i64;
+                let (ix0, ix1) = (texel(x0, origin[0]), texel(x1, origin[0]) + 1);
+                let (iz0, iz1) = (texel(z0, origin[1]), texel(z1, origin[1]) + 1);
+                let blocks = pyramid.blocks(x0, x1, z0, z1);
+                let (h, steep, disp) = (
+                    pyramid.heights.get(blocks),
+                    pyramid.steep.get(blocks),
+                    pyramid.disp.get(blocks).0,
+                );
+                for z in iz0..=iz1 {
+                    for x in ix0..=ix1 {
+                        let (c, r, b) = (at(x, z), at(x + 1, z), at(x, z + 1));
+                        let v = c[field::H];
+                        assert!(h[0] <= v && v <= h[1], "h {v} outside {h:?}");
+                        let d = |a: &[f32; 8], k: usize| ((a[k] - c[k]).abs() as f64 / dx) as f32;
+                        let slope = d(r, field::H).max(d(b, field::H));
+                        let diag = d(r, field::DX).max(d(b, field::DZ));
+                        let off = d(b, field::DX).max(d(r, field::DZ));
+                        assert!(slope <= steep.slope, "{slope} > {steep:?}");
+                        assert!(
+                            diag <= steep.strain[0] && off <= steep.strain[1],
+                            "{steep:?}"
+                        );
+                        let (ddx, ddz) = (c[field::DX], c[field::DZ]);
+                        assert!(disp[0] <= ddx && ddx <= disp[1], "Dx {ddx} {disp:?}");
+                        assert!(disp[2] <= ddz && ddz <= disp[3], "Dz {ddz} {disp:?}");
+                    }
+                }
+                // no looser than the blocks' own texels: at most four blocks of the level
+                // (or the whole layer), whose join the values must equal
+                let (level, [jx0, jx1], [jz0, jz1]) = blocks;
+                if level > 0 {
+                    let side = 1i64 << level;
+                    let mut hi = f32::NEG_INFINITY;
+                    for jz in [jz0, jz1] {
+                        for jx in [jx0, jx1] {
+                            for z in jz * side..(jz + 1) * side {
+                                for x in jx * side..(jx + 1) * side {
+                                    hi = hi.max(at(x, z)[field::H]);
+                                }
+                            }
+                        }
+                    }
+                    assert_eq!(h[1], hi);
+                }
+            }
+        }
     }
 }

@@ -7,14 +7,13 @@
 //! range is its end values and its closest approach; the surface's range is the layers'
 //! pyramids over the nominal positions x = s - D(x) of the segment's arc positions s (the box
 //! [`ExactSurface::nominal_box`]). Segments that are not cleared are halved until they are
-//! shorter than [`ExactSurface::split_m`] (or, where no slope bound holds over their box,
-//! [`ExactSurface::split_rough_m`]), then marched: from a point where F = f, the surface
-//! cannot be reached before |f| / K, K = (1 + slope bound over the box) |d| bounding dF/dt, so
-//! that step is taken when it is longer than the floor (half the finest texel), and the
-//! floor otherwise. The
-//! floor is what the march does not certify: a crest the ray clips over less than the floor
-//! (both crossings between two points) is not seen. A sign change brackets a root, which the
-//! Illinois variant of false position narrows to [`TOL_F`].
+//! shorter than [`ExactSurface::split_m`] (or, where neither the box's nor the sea's slope
+//! bound holds, [`ExactSurface::split_rough_m`]), then marched: from a point where F = f, the
+//! surface cannot be reached before |f| / K, K = (1 + slope bound) |d| bounding dF/dt, so that
+//! step is taken when it is longer than the floor (half the finest texel), and the floor
+//! otherwise. The floor is what the march does not certify: a crest the ray clips over less
+//! than the floor (both crossings between two points) is not seen. A sign change brackets a
+//! root, which the Illinois variant of false position narrows to [`TOL_F`].
 
 use super::ExactSurface;
 use super::implicit::{Eval, Implicit, Warm, sphere_coords};
@@ -84,17 +83,7 @@ impl ExactSurface {
             return None;
         }
         let r = self.earth_radius_m;
-        let dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        let rel = [o[0], o[1] + r, o[2]];
-        let mut ray = RayPath {
-            o,
-            d,
-            len: dd.sqrt(),
-            t_low: -(rel[0] * d[0] + rel[1] * d[1] + rel[2] * d[2]) / dd,
-            imp: self.implicit(),
-            warm: None,
-            r,
-        };
+        let mut ray = self.ray_path(o, d);
         // the side the ray is on where its search starts, known after the first evaluation
         let mut side: Option<(f64, Eval)> = None;
         // depth first, nearer half on top: at most one entry per level waits, plus the top
@@ -108,21 +97,21 @@ impl ExactSurface {
                 continue;
             }
             // Halved down to the displacement's length, below which the box barely narrows;
-            // further, down to eight of the finest texels, where no slope bound certifies a
-            // march over it (only the bounds can skip ground there)
-            let [x0, x1, z0, z1] = area;
-            let local = self.bounds.steepness(x0, x1, z0, z1);
-            let slope = match (local.slope_limit(), self.slope) {
-                (Some(l), Some(g)) => Some(l.min(g)),
-                (l, g) => l.or(g),
-            };
+            // further, down to eight of the finest texels, where no slope bound (the box's or
+            // the sea's) certifies a march over it: only the bounds can skip ground there
             let ds = (b.s[0] - a.s[0]).hypot(b.s[1] - a.s[1]);
-            let split = if slope.is_some() {
-                self.split_m
+            let halve = depth < MAX_DEPTH && ds > self.split_rough_m;
+            let slope = if halve && ds > self.split_m {
+                None
             } else {
-                self.split_rough_m
+                let [x0, x1, z0, z1] = area;
+                let local = self.bounds.steepness(x0, x1, z0, z1);
+                match (local.slope_limit(), self.slope) {
+                    (Some(l), Some(g)) => Some(l.min(g)),
+                    (l, g) => l.or(g),
+                }
             };
-            if ds > split && depth < MAX_DEPTH {
+            if halve && (ds > self.split_m || slope.is_none()) {
                 let m = ray.end(0.5 * (a.t + b.t));
                 stack[sp] = (m, b, depth + 1);
                 stack[sp + 1] = (a, m, depth + 1);
@@ -144,6 +133,42 @@ impl ExactSurface {
             }
         }
         None
+    }
+
+    /// The ray `o + t d` as the search walks it.
+    fn ray_path(&self, o: [f64; 3], d: [f64; 3]) -> RayPath<'_> {
+        let r = self.earth_radius_m;
+        let dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        let rel = [o[0], o[1] + r, o[2]];
+        RayPath {
+            o,
+            d,
+            len: dd.sqrt(),
+            t_low: -(rel[0] * d[0] + rel[1] * d[1] + rel[2] * d[2]) / dd,
+            imp: self.implicit(),
+            warm: None,
+            r,
+        }
+    }
+
+    /// For tests: the box of nominal positions of the ray `o + t d` over `[t0, t1]`
+    /// ([`Self::nominal_box`]), and the nominal positions of the surface points under `n + 1`
+    /// points of that stretch, as F's inversion finds them to full accuracy.
+    #[cfg(test)]
+    pub(super) fn nominal_box_and_points(
+        &self,
+        o: [f64; 3],
+        d: [f64; 3],
+        [t0, t1]: [f64; 2],
+        n: usize,
+    ) -> ([f64; 4], Vec<super::implicit::Eval>) {
+        let mut ray = self.ray_path(o, d);
+        ray.imp.lip = f64::INFINITY;
+        let area = self.nominal_box(&ray, &ray.end(t0), &ray.end(t1));
+        let points = (0..=n)
+            .map(|i| ray.eval_cold(t0 + (t1 - t0) * i as f64 / n as f64))
+            .collect();
+        (area, points)
     }
 
     /// The nominal positions `[x0, x1, z0, z1]` whose surface points may lie over the arc
@@ -173,12 +198,17 @@ impl ExactSurface {
         for _ in 0..NARROWINGS {
             let [x0, x1, z0, z1] = area;
             let d = self.bounds.displacement(x0, x1, z0, z1);
-            area = [
+            let narrowed = [
                 x0.max(s[0] - d[1]),
                 x1.min(s[1] - d[0]),
                 z0.max(s[2] - d[3]),
                 z1.min(s[3] - d[2]),
             ];
+            // (an empty box would be rounding's doing: keep the one that holds x)
+            if narrowed[0] > narrowed[1] || narrowed[2] > narrowed[3] {
+                break;
+            }
+            area = narrowed;
         }
         area
     }

@@ -151,6 +151,40 @@ fn local_slope_and_strain_bounds_hold_every_secant_in_the_box() {
     );
 }
 
+/// A stretch's box of nominal positions, narrowed by the displacement's range, holds the
+/// nominal position of the surface point under every point of the stretch: rays from 2 m to
+/// 10 km up, steep to grazing, stretches of 1 cm to 300 m out to 60 km.
+#[test]
+fn a_stretch_box_holds_the_nominal_positions_under_it() {
+    let ocean = sea(1.0);
+    let surface = ExactSurface::new(ocean, [50.0, 20.0], EARTH_R).unwrap();
+    let mut rng = Rng::keyed(&[8]);
+    let mut narrower = 0;
+    let [dx, _] = surface.disp;
+    for _ in 0..300 {
+        let height = 2.0 * 5000f64.powf(rng.f64());
+        let (az, dip) = (
+            std::f64::consts::TAU * rng.f64(),
+            0.001 + 1.5 * rng.f64().powi(3),
+        );
+        let d = [dip.cos() * az.cos(), -dip.sin(), dip.cos() * az.sin()];
+        let reach = (height / dip.sin()).min(60e3);
+        let t0 = reach * rng.f64();
+        let t1 = t0 + 0.01 * 3e4f64.powf(rng.f64());
+        let (area, points) = surface.nominal_box_and_points([0.0, height, 0.0], d, [t0, t1], 40);
+        narrower += usize::from(area[1] - area[0] < (t1 - t0) + 2.0 * dx - 0.1);
+        for e in points.iter().filter(|e| e.converged) {
+            let [x, z] = e.x;
+            assert!(
+                area[0] <= x && x <= area[1] && area[2] <= z && z <= area[3],
+                "({x}, {z}) outside {area:?} ({height} m up, dip {dip}, t {t0}..{t1})"
+            );
+        }
+    }
+    // the narrowing narrows: most boxes are well inside the sea's largest displacement
+    assert!(narrower > 150, "{narrower} of 300 boxes narrowed");
+}
+
 #[test]
 fn implicit_function_is_the_signed_altitude_above_the_surface() {
     for chop in [0.0, 1.0] {
