@@ -397,7 +397,6 @@ impl SurfaceBounds {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ocean::{LayerSpec, OceanParams, Surface};
     use crate::rng::Rng;
 
     /// Each layer's pyramid queries against the texels a box's reads touch, counted one by
@@ -405,21 +404,7 @@ mod tests {
     /// start at them), and is no looser than the texels of the blocks it joins.
     #[test]
     fn every_query_holds_the_texels_of_its_box_one_by_one() {
-        let p = OceanParams {
-            layers: vec![
-                LayerSpec {
-                    size_m: 200.0,
-                    n: 128,
-                },
-                LayerSpec {
-                    size_m: 23.7,
-                    n: 64,
-                },
-            ],
-            choppiness: 1.0,
-            ..OceanParams::default()
-        };
-        let ocean = Surface::new(&p, 5).unwrap();
+        let ocean = crate::accel::exact::tests::sea(1.0);
         let sampler = ocean.sampler([321.0, -45.5]);
         let mut rng = Rng::keyed(&[6]);
         for (layer, &origin) in sampler.layers().iter().zip(sampler.grid_origins()) {

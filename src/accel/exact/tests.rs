@@ -12,7 +12,7 @@ use crate::rng::Rng;
 const EARTH_R: f64 = crate::lod::EARTH_RADIUS_M;
 const CAMERA_M: f64 = 5.0;
 
-fn sea(choppiness: f64) -> Arc<Surface> {
+pub(super) fn sea(choppiness: f64) -> Arc<Surface> {
     let p = OceanParams {
         layers: vec![
             LayerSpec {
