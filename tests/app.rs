@@ -111,6 +111,9 @@ fn tiny_compare_runs_end_to_end_and_writes_every_file() {
     };
     scene.render.spp = 8;
     scene.render.threads = 2;
+    // `bend`: under `terminate` the coarse mesh can come within this tiny render's noise of
+    // the baseline, and the corrected stds this test reads fall to 0
+    scene.render.wrong_side = vastocean::config::WrongSide::Bend;
     let high = LodConfig {
         preset: LodChoice::Custom,
         near_size_m: Some(0.3),
@@ -241,6 +244,8 @@ fn bench_accuracy_writes_its_files_and_a_configuration_matches_itself() {
     let dir = tmp("bench-accuracy");
     let mut scene = AccuracyJob::default_scene();
     scene.render.threads = 2;
+    // a policy other than the default, which the summary must name
+    scene.render.wrong_side = vastocean::config::WrongSide::Mirror;
     let job = AccuracyJob {
         scene,
         width: 64,
@@ -305,6 +310,8 @@ fn bench_accuracy_writes_its_files_and_a_configuration_matches_itself() {
     ] {
         assert!(v.get(key).is_some(), "{key}");
     }
+    assert_eq!(v["wrong_side"], "mirror");
+    assert!(r.to_string().contains("wrong-side policy mirror"));
     for key in [
         "lod",
         "normals",
@@ -391,7 +398,7 @@ fn study_plans_runs_through_gnu_parallel_resumes_and_summarizes() {
     #[rustfmt::skip]
     let plan = ["study", "plan", "--out", &s(&study), "--cases", "3", "--seed", "5",
         "--width", "256", "--spp", "8", "--high-near-size", "0.45", "--low-near-size", "0.9",
-        "--clip-sun", "100", "--skies", &s(&skies)];
+        "--clip-sun", "100", "--skies", &s(&skies), "--wrong-side", "bend"];
     let (code, out, err) = vastocean(&plan);
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("planned 3 cases over 2 skies"), "{out}");
@@ -402,7 +409,10 @@ fn study_plans_runs_through_gnu_parallel_resumes_and_summarizes() {
     );
     // The same seed draws the same cases; a folder holds one plan.
     let case1 = std::fs::read_to_string(study.join("cases/1/scene.toml")).unwrap();
-    assert!(case1.contains("clip_relative = 100"), "{case1}");
+    assert!(
+        case1.contains("clip_relative = 100") && case1.contains("wrong_side = \"bend\""),
+        "{case1}"
+    );
     assert_eq!(
         vastocean(&plan).0,
         2,

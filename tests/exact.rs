@@ -148,11 +148,13 @@ fn an_exact_render_has_no_nans_holes_or_self_hits() {
     assert_eq!(r.self_hits, 0);
     let hits = r.counters.hits as f64;
     assert!(hits > 1000.0);
-    // the mapped normal and the surface's tangent plane disagree rarely (bent reflections)
+    // the mapped normal and the surface's tangent plane disagree rarely, whatever the policy
+    // does about it (bends, mirrors or ends the branch)
+    let c = &r.counters;
+    let events = c.wrong_side + c.backfacing_shading + c.bent + c.terminated;
     assert!(
-        (r.counters.bent as f64) < 0.01 * hits,
-        "{} of {hits}",
-        r.counters.bent
+        events > 0 && (events as f64) < 0.01 * hits,
+        "{events} of {hits}"
     );
 }
 

@@ -29,6 +29,11 @@ pub enum BenchCommand {
         /// group on the frontier.
         #[arg(long)]
         filtered: bool,
+        /// What to do when a shading normal would send a ray to the wrong side of its triangle,
+        /// in every render of the sweep and its reference (default: the scene's, terminate
+        /// unless its file says otherwise; docs/accuracy.md, "The wrong-side policy").
+        #[arg(long, value_parser = super::choice::<vastocean::config::WrongSide>())]
+        wrong_side: Option<vastocean::config::WrongSide>,
         /// Worker threads (0 = all cores).
         #[arg(long, default_value_t = 0, value_parser = super::threads_arg)]
         threads: usize,
@@ -58,12 +63,13 @@ pub enum BenchCommand {
 pub fn run(c: BenchCommand) -> Result<()> {
     match c {
         #[rustfmt::skip]
-        BenchCommand::Accuracy { out, config, quick, filtered, threads, json } => {
+        BenchCommand::Accuracy { out, config, quick, filtered, wrong_side, threads, json } => {
             let mut scene = match &config {
                 Some(path) => SceneConfig::load(path).map_err(AppError::from)?,
                 None => app::bench::accuracy::AccuracyJob::default_scene(),
             };
             scene.render.threads = threads;
+            scene.render.wrong_side = wrong_side.unwrap_or(scene.render.wrong_side);
             let mut job = if quick {
                 app::bench::accuracy::AccuracyJob::quick(scene, out)
             } else {

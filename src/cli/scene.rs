@@ -68,7 +68,7 @@ pub struct SceneFlags {
     #[arg(long, value_parser = choice::<vastocean::config::SurfaceKind>())]
     surface: Option<vastocean::config::SurfaceKind>,
     /// What to do when a shading normal would send a ray to the wrong side of its triangle
-    /// (docs/accuracy.md, "The wrong-side policy").
+    /// (default terminate; docs/accuracy.md, "The wrong-side policy").
     #[arg(long, value_parser = choice::<vastocean::config::WrongSide>())]
     wrong_side: Option<vastocean::config::WrongSide>,
     /// How the ocean's layers are read between their grid points, for the mapped normals and the

@@ -47,7 +47,8 @@ pub enum StudyCommand {
         /// Make the low tessellation a custom one with triangles this wide near the camera, m.
         #[arg(long)]
         low_near_size: Option<f64>,
-        /// What to do when a shading normal points a ray to the wrong side of its triangle.
+        /// What to do when a shading normal points a ray to the wrong side of its triangle
+        /// (default terminate, as `compare --wrong-side`).
         #[arg(long, value_parser = choice::<WrongSide>())]
         wrong_side: Option<WrongSide>,
         /// Clip every sky's sun at this multiple of the sky's median luminance, as the paper's

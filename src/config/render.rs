@@ -55,12 +55,14 @@ pub enum WrongSide {
     Flip,
     /// Bend the shading normal just enough that the reflection leaves above the triangle
     /// (Cycles' ensure_valid_reflection, after Keller et al. 2017); a refraction still on the
-    /// wrong side is mirrored. The default because it conserves energy and sends no reflection
-    /// to the wrong side, as production renderers do; not for its ratio (docs/accuracy.md).
-    #[default]
+    /// wrong side is mirrored. Conserves energy, as production renderers do.
     Bend,
     /// End the branch that would leave on the wrong side, and the path at a shading normal
-    /// facing away (Mitsuba's strictNormals): no wrong-side light, at the cost of energy.
+    /// facing away (Mitsuba's strictNormals): no wrong-side light, at the cost of energy. The
+    /// default because it brings both the paper's baseline and its coarse mesh closest to a
+    /// truth no policy touches (the exact displaced surface; docs/accuracy.md, "Against the
+    /// truth"), not for its ratio.
+    #[default]
     Terminate,
 }
 

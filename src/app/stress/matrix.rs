@@ -3,7 +3,7 @@
 
 use super::{Cell, Extra};
 use crate::config::{
-    AnalyticSky, Backend, FilterLobe, LodChoice, NormalMode, Projection, SceneConfig,
+    AnalyticSky, Backend, FilterLobe, LodChoice, NormalMode, Projection, SceneConfig, WrongSide,
 };
 
 /// Whole multiples of every period of [`period_layers`] are multiples of 400 m.
@@ -285,12 +285,17 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
             Extra::Agrees("lod-paper-high"),
         );
     }
+    // The furnace cells keep every branch's energy (`bend`): under the default `terminate` an
+    // ended branch carries no light, and a cell could only ever lose it.
     let furnace = AnalyticSky::Uniform { radiance: [1.0; 3] };
     add(
         "furnace",
         "white furnace",
         "uniform sky 1".into(),
-        &|s| s.sky.analytic = furnace,
+        &|s| {
+            s.sky.analytic = furnace;
+            s.render.wrong_side = WrongSide::Bend;
+        },
         Extra::Furnace,
     );
     add(
@@ -299,6 +304,7 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
         "uniform sky 1, storm, camera 30 m".into(),
         &|s| {
             s.sky.analytic = furnace;
+            s.render.wrong_side = WrongSide::Bend;
             storm(s);
             s.camera.height_m = 30.0;
         },
@@ -314,6 +320,7 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
             format!("uniform sky 1, storm, filtered normals ({lobe} lobe)"),
             &|s| {
                 s.sky.analytic = furnace;
+                s.render.wrong_side = WrongSide::Bend;
                 storm(s);
                 s.camera.height_m = 30.0;
                 s.render.normals = NormalMode::Filtered;
@@ -328,6 +335,7 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
         "uniform sky 1, pinhole down".into(),
         &|s| {
             s.sky.analytic = furnace;
+            s.render.wrong_side = WrongSide::Bend;
             s.camera.projection = pinhole(-60.0);
         },
         Extra::Furnace,

@@ -228,6 +228,8 @@ pub struct AccuracyReport {
     pub front: Vec<Point>,
     pub width: usize,
     pub rows_deg: (f64, f64),
+    /// The wrong-side policy of every render, the reference's included.
+    pub wrong_side: crate::config::WrongSide,
     pub seconds_total: f64,
     pub csv: PathBuf,
     pub png: PathBuf,

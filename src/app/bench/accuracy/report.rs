@@ -108,6 +108,7 @@ pub(super) fn write(
         reference,
         front,
         width: job.width,
+        wrong_side: job.scene.render.wrong_side,
         rows_deg: ROWS,
         seconds_total: t0.elapsed().as_secs_f64(),
         csv,
@@ -124,8 +125,9 @@ impl fmt::Display for AccuracyReport {
         let r = &self.reference;
         writeln!(
             f,
-            "speed / accuracy at {} px against {} mapped at {} spp over rows {} to {} degrees ({} triangles; its noise {:.2e}, {:.0}% of the smallest error{})",
+            "speed / accuracy at {} px, wrong-side policy {}, against {} mapped at {} spp over rows {} to {} degrees ({} triangles; its noise {:.2e}, {:.0}% of the smallest error{})",
             self.width,
+            self.wrong_side,
             r.lod,
             r.spp,
             self.rows_deg.0,
