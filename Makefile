@@ -47,8 +47,8 @@ bench: setup
 
 # The two benchmark reports docs/performance.md and docs/accuracy.md quote, regenerated in full
 # into benches/results/ (each summary.json records its own run time). Nothing else may run
-# meanwhile: they time things. The accuracy reports were measured under the wrong-side policy
-# bend, which they name.
+# meanwhile: they time things. The committed accuracy reports were measured under the
+# wrong-side policy bend, which a regenerated report names in its summary.
 bench-report: build
 	./target/release/vastocean bench bvh --out benches/results/bvh
 	./target/release/vastocean bench accuracy --wrong-side bend --out benches/results/accuracy

@@ -602,3 +602,25 @@ fn truth_flags_that_would_do_nothing_are_refused() {
     }
     assert!(!out.join("summary.json").exists());
 }
+
+#[test]
+fn bench_accuracy_takes_a_wrong_side_policy_and_refuses_a_bad_one() {
+    let (_, help, _) = vastocean(&["bench", "accuracy", "--help"]);
+    assert!(help.contains("--wrong-side"), "{help}");
+    let out = tmp("bench-bad-policy");
+    let (code, _, err) = vastocean(&[
+        "bench",
+        "accuracy",
+        "--quick",
+        "--wrong-side",
+        "sideways",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("sideways") && err.contains("terminate"),
+        "{err}"
+    );
+    assert!(!out.join("summary.json").exists());
+}

@@ -85,6 +85,11 @@ fn filtered_normals_converge_to_the_mapped_image_under_a_sky_without_a_sun() {
                 smith < 0.95 * mapped,
                 "smith {smith} vs mapped {mapped}: masking loses light"
             );
+        } else {
+            assert!(
+                smith > mapped,
+                "smith {smith} vs mapped {mapped}: terminate ends more light than masking"
+            );
         }
     }
 }

@@ -1,7 +1,7 @@
 //! `compare --against truth`: a baseline on which the wrong-side question never arises. The
 //! paper measures every scenario against its high tessellation with mapped normals, and that
 //! baseline is itself touched by the wrong-side policy (about one hit in seven in the analysed
-//! band has its shading normal bent). The truth is the exact displaced surface
+//! band has a shading normal that disagrees with its triangle). The truth is the exact displaced surface
 //! (`crate::accel::exact`, found inside the low tessellation's triangles) shaded with its own
 //! tangent plane ([`NormalMode::Geometric`]): the normal that shades is the geometry's, so a
 //! mirror reflection leaves at the elevation it arrived at and no policy is ever consulted. It
