@@ -5,6 +5,7 @@ mod bvh;
 mod cli;
 mod common;
 mod defects;
+mod docs;
 #[cfg(feature = "embree")]
 mod embree;
 mod estimator;
@@ -15,6 +16,8 @@ mod frames;
 mod lod;
 mod passes;
 mod render;
+mod render_batches;
 mod sea_state;
 mod sky;
 mod stress;
+mod study;
