@@ -1,10 +1,11 @@
 //! `compare --against truth`: a baseline on which the wrong-side question never arises. The
 //! paper measures every scenario against its high tessellation with mapped normals, and that
 //! baseline is itself touched by the wrong-side policy (about one hit in seven in the analysed
-//! band has a shading normal that disagrees with its triangle). The truth is the exact displaced surface
-//! (`crate::accel::exact`, found inside the low tessellation's triangles) shaded with its own
-//! tangent plane ([`NormalMode::Geometric`]): the normal that shades is the geometry's, so a
-//! mirror reflection leaves at the elevation it arrived at and no policy is ever consulted. It
+//! band has a shading normal that disagrees with its triangle). The truth is the exact
+//! displaced surface (`crate::accel::exact`, found inside the low tessellation's triangles)
+//! shaded with its own tangent plane ([`NormalMode::Geometric`]): the normal that shades is the
+//! geometry's, so a mirror reflection leaves at the elevation it arrived at and no policy is
+//! ever consulted. It
 //! is rendered on the analysed rows only, with `truth_boost` times each pixel's samples, and
 //! every scenario (the paper's baseline included) is measured against it with the same
 //! estimator. The truth is by far a comparison's dearest part and no wrong-side policy touches

@@ -285,17 +285,17 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
             Extra::Agrees("lod-paper-high"),
         );
     }
-    // The furnace cells keep every branch's energy (`bend`): under the default `terminate` an
-    // ended branch carries no light, and a cell could only ever lose it.
-    let furnace = AnalyticSky::Uniform { radiance: [1.0; 3] };
+    // A uniform sky of 1, and a policy that keeps every branch's energy (`bend`): under the
+    // default `terminate` an ended branch carries no light, and a cell could only ever lose it.
+    let furnace = |s: &mut SceneConfig| {
+        s.sky.analytic = AnalyticSky::Uniform { radiance: [1.0; 3] };
+        s.render.wrong_side = WrongSide::Bend;
+    };
     add(
         "furnace",
         "white furnace",
         "uniform sky 1".into(),
-        &|s| {
-            s.sky.analytic = furnace;
-            s.render.wrong_side = WrongSide::Bend;
-        },
+        &furnace,
         Extra::Furnace,
     );
     add(
@@ -303,8 +303,7 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
         "white furnace",
         "uniform sky 1, storm, camera 30 m".into(),
         &|s| {
-            s.sky.analytic = furnace;
-            s.render.wrong_side = WrongSide::Bend;
+            furnace(s);
             storm(s);
             s.camera.height_m = 30.0;
         },
@@ -319,8 +318,7 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
             "white furnace",
             format!("uniform sky 1, storm, filtered normals ({lobe} lobe)"),
             &|s| {
-                s.sky.analytic = furnace;
-                s.render.wrong_side = WrongSide::Bend;
+                furnace(s);
                 storm(s);
                 s.camera.height_m = 30.0;
                 s.render.normals = NormalMode::Filtered;
@@ -334,8 +332,7 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
         "white furnace",
         "uniform sky 1, pinhole down".into(),
         &|s| {
-            s.sky.analytic = furnace;
-            s.render.wrong_side = WrongSide::Bend;
+            furnace(s);
             s.camera.projection = pinhole(-60.0);
         },
         Extra::Furnace,
