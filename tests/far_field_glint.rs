@@ -13,12 +13,13 @@
 //!
 //! the same at the specular centre, different off it: mapped normals do not weigh a facet by the
 //! area it shows the camera. The slopes' covariance is the realization's (the slope tables'
-//! total, checked against the grid by Parseval in the ocean's tests); the waves are linear
-//! (no choppiness), so their slopes are Gaussian.
+//! total, checked against the grid by Parseval in the ocean's tests) for Cox & Munk's, and the
+//! realization's as the lookup reads it (checked against the reads there) for normal mapping's;
+//! the waves are linear (no choppiness), so their slopes are Gaussian.
 
 use glam::DVec3;
 use vastocean::config::{AnalyticSky, FilterLobe, SceneConfig};
-use vastocean::ocean::slopes::SurfaceSlopes;
+use vastocean::ocean::slopes::{SlopeSource, SurfaceSlopes};
 use vastocean::render::Camera;
 use vastocean::render::pipeline::prepare;
 use vastocean::sky::{SUN_RADIUS_RAD, SkySource};
@@ -42,7 +43,7 @@ fn scene(lobe: FilterLobe, spp: u32) -> SceneConfig {
 struct Setting {
     height_m: f64,
     ior: f64,
-    /// The realization's slope covariance (xx, xz, zz).
+    /// The slope covariance (xx, xz, zz): the realization's, or as the lookup reads it.
     cov: [f64; 3],
     /// The sun as points: each direction with its luminance times the solid angle it stands for.
     sun: Vec<(DVec3, f64)>,
@@ -198,18 +199,22 @@ fn blocks(cfg: &SceneConfig) -> Vec<Block> {
     let smith = Setting {
         height_m: cfg.camera.height_m,
         ior: cfg.water.ior as f64,
-        cov: SurfaceSlopes::new(&p.ocean).total(),
+        cov: SurfaceSlopes::new(&p.ocean, SlopeSource::Spectrum).total(),
         sun,
         smith: true,
     };
+    // the `mapped` lobe's slopes are the ones the lookup reads
     let by_area = Setting {
         smith: false,
+        cov: SurfaceSlopes::new(&p.ocean, SlopeSource::Read(p.ocean.params().interp)).total(),
         ..smith.clone()
     };
     eprintln!(
-        "slope covariance (xx, xz, zz) {:?}, mss {:.5}",
+        "slope covariance (xx, xz, zz) {:?}, mss {:.5}; as read {:?}, mss {:.5}",
         smith.cov,
-        smith.cov[0] + smith.cov[2]
+        smith.cov[0] + smith.cov[2],
+        by_area.cov,
+        by_area.cov[0] + by_area.cov[2]
     );
     let r = p.render(cfg, false).unwrap();
     let camera = Camera::new(cfg.camera.projection, cfg.camera.width, cfg.camera.aspect);

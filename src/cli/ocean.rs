@@ -79,7 +79,8 @@ pub struct OceanArgs {
     csv: Option<PathBuf>,
     /// Split the mean square slope as `--normals filtered` does for a pixel footprint W metres
     /// wide on the sea (the default filter width, a Gaussian of std W / sqrt 12): what the
-    /// mapped normals resolve and what the rough lobe takes, per layer.
+    /// mapped normals resolve and what the rough lobe takes, per layer (the sea's slopes, the
+    /// `smith` lobe's split; the default `mapped` lobe splits the slopes as read the same way).
     #[arg(long, value_name = "W")]
     footprint: Option<f64>,
     /// Print the result as one JSON object on stdout instead of the report.

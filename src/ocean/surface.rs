@@ -22,7 +22,7 @@ use rayon::prelude::*;
 use super::layer::{
     FIELD_COUNT, FieldPlanes, Layer, SLOPES, Slopes, Texel, add_texel, field, slopes,
 };
-use super::slopes::SurfaceSlopes;
+use super::slopes::{SlopeSource, SurfaceSlopes};
 use super::spectrum::Spectrum;
 use super::{Interp, MAX_LAYERS, OceanError, OceanParams};
 
@@ -44,6 +44,8 @@ pub struct Surface {
     /// [`Surface::slopes`], computed on first use (35 ms for the default ocean: a pass over
     /// every layer's amplitudes) and kept until the time changes.
     slopes: OnceLock<SurfaceSlopes>,
+    /// [`Surface::read_slopes`], likewise.
+    read_slopes: OnceLock<SurfaceSlopes>,
     /// [`Surface::summary`], computed on first use (62 ms for the default ocean: band integrals
     /// of the spectrum and passes over every texel) and kept until the time changes.
     summary: OnceLock<OceanSummary>,
@@ -373,6 +375,7 @@ impl Surface {
             seconds: 0.0,
             sampled: OnceLock::new(),
             slopes: OnceLock::new(),
+            read_slopes: OnceLock::new(),
             summary: OnceLock::new(),
         };
         surface.seconds = start.elapsed().as_secs_f64();
@@ -395,6 +398,7 @@ impl Surface {
             seconds: 0.0,
             sampled: OnceLock::new(),
             slopes: OnceLock::new(),
+            read_slopes: OnceLock::new(),
             summary: OnceLock::new(),
         }
     }
@@ -408,6 +412,7 @@ impl Surface {
         self.params.time_s = t;
         self.sampled = OnceLock::new();
         self.slopes = OnceLock::new();
+        self.read_slopes = OnceLock::new();
         self.summary = OnceLock::new();
         Ok(())
     }
@@ -477,9 +482,18 @@ impl Surface {
     }
 
     /// The slope covariance by band of every layer at the surface's time, what filtered normals
-    /// split at each hit ([`SurfaceSlopes`]), computed once and shared by every render of it.
+    /// split at each hit ([`SurfaceSlopes`]) under the `smith` lobe, computed once and shared by
+    /// every render of it.
     pub fn slopes(&self) -> &SurfaceSlopes {
-        self.slopes.get_or_init(|| SurfaceSlopes::new(self))
+        self.slopes
+            .get_or_init(|| SurfaceSlopes::new(self, SlopeSource::Spectrum))
+    }
+
+    /// [`Surface::slopes`] as [`Surface::sampler`] reads them (`params.interp`), what the
+    /// `mapped` lobe splits: the normals mapped normals would have.
+    pub fn read_slopes(&self) -> &SurfaceSlopes {
+        self.read_slopes
+            .get_or_init(|| SurfaceSlopes::new(self, SlopeSource::Read(self.params.interp)))
     }
 
     /// A lower bound on J = (1 + dDx/dx)(1 + dDz/dz) - (dDx/dz)^2 over every read of the summed

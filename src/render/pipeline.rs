@@ -429,7 +429,13 @@ impl Prepared {
         let camera = Camera::new(cfg.camera.projection, cfg.camera.width, cfg.camera.aspect);
         let sampler = self.ocean.sampler(self.camera_position_m);
         let filtered = cfg.render.normals == crate::config::NormalMode::Filtered;
-        let slopes = filtered.then(|| self.pool.install(|| self.ocean.slopes()));
+        // the `mapped` lobe draws the normals the lookup would read, the `smith` lobe the sea's
+        let slopes = filtered.then(|| {
+            self.pool.install(|| match cfg.render.filter_lobe {
+                crate::config::FilterLobe::Mapped => self.ocean.read_slopes(),
+                crate::config::FilterLobe::Smith => self.ocean.slopes(),
+            })
+        });
         let scene_ref = SceneRef {
             slopes,
             sun: if filtered { self.sky.sun_light() } else { None },

@@ -45,6 +45,7 @@ mod read;
 
 pub use fields::FieldPlanes;
 
+pub use read::read_power_transfer;
 #[cfg(test)]
 use read::{LANE_RANGE, split, split_lanes};
 pub(crate) use read::{LagCorrelations, add_texel};

@@ -95,6 +95,44 @@ fn catmull_rom(t: f32) -> [f32; 4] {
     ]
 }
 
+/// The mean power a read with `interp` keeps of a wave that advances `theta` radians a texel
+/// along one axis, over the positions between grid points: a cosine of random phase read at the
+/// fraction t with weights w_i(t) on the texels at offsets o_i has E[v^2] / E[cos^2] =
+/// sum_ij w_i w_j cos((o_i - o_j) theta), here averaged over t by 4-point Gauss-Legendre (exact:
+/// the integrand is a polynomial of degree at most 6 in t). Bilinear gives (2 + cos theta) / 3.
+/// A 2-D read keeps the product of its two axes' (and over a period the cross terms between
+/// waves average to zero, so a field read keeps the sum over its waves). A variance-preserving
+/// read rescales each field to its grid variance: 1 here, exact for the field's total, not
+/// wave by wave (it shifts power towards the shorter waves).
+pub fn read_power_transfer(interp: Interp, theta: f64) -> f64 {
+    const GAUSS: [(f64, f64); 4] = [
+        (0.069_431_844_202_973_7, 0.173_927_422_568_726_9),
+        (0.330_009_478_207_571_9, 0.326_072_577_431_273_1),
+        (0.669_990_521_792_428_1, 0.326_072_577_431_273_1),
+        (0.930_568_155_797_026_3, 0.173_927_422_568_726_9),
+    ];
+    let mean = |weights: &dyn Fn(f64) -> [f64; 4], taps: usize| -> f64 {
+        GAUSS
+            .iter()
+            .map(|&(t, g)| {
+                let w = weights(t);
+                let mut sum = 0.0;
+                for i in 0..taps {
+                    for j in 0..taps {
+                        sum += w[i] * w[j] * ((i as f64 - j as f64) * theta).cos();
+                    }
+                }
+                g * sum
+            })
+            .sum()
+    };
+    match interp {
+        Interp::Bilinear => mean(&|t| [1.0 - t, t, 0.0, 0.0], 2),
+        Interp::Bicubic => mean(&|t| catmull_rom(t as f32).map(f64::from), 4),
+        Interp::VariancePreserving => 1.0,
+    }
+}
+
 impl Layer {
     #[inline]
     fn texel(&self, ix: i64, iz: i64) -> &Texel {
