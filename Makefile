@@ -52,7 +52,7 @@ bench: setup
 bench-report: build
 	./target/release/vastocean bench bvh --out benches/results/bvh
 	./target/release/vastocean bench accuracy --wrong-side bend --out benches/results/accuracy
-	./target/release/vastocean bench accuracy --wrong-side bend --filtered --out benches/results/accuracy-filtered
+	./target/release/vastocean bench accuracy --filtered --out benches/results/accuracy-filtered
 
 # The paper's study (docs/comparison.md): plans STUDY if it has no plan
 # yet (STUDY_FLAGS go to `study plan`), runs its unfinished cases with GNU parallel, one case per
