@@ -50,10 +50,11 @@ fn with(cfg: &SceneConfig, normals: NormalMode, lobe: FilterLobe, spp: u32) -> S
 #[test]
 fn filtered_normals_converge_to_the_mapped_image_under_a_sky_without_a_sun() {
     // A gradient sky: no glints, so a few samples converge. The `mapped` lobe's Gaussian slopes
-    // are the ones the lookup reads (bilinear reads keep some 9 % less slope variance than the
+    // are the ones the lookup reads (bilinear reads keep some 11 % less slope variance than the
     // sea's), which matters most under `terminate`, where the slopes decide how many paths end:
-    // with the sea's slopes the lobe was 3.6 % darker there. The smith lobe models the sea's
-    // slopes (docs/filtered.md).
+    // with the sea's slopes the lobe is 3.6 % darker there (0.377 against 0.391), which the
+    // tolerance of half a per cent plus four standard errors (0.011) refuses. The smith lobe
+    // models the sea's slopes (docs/filtered.md).
     let sky = AnalyticSky::Gradient {
         zenith: [0.3, 0.5, 1.0],
         horizon: [1.0, 1.0, 1.0],
@@ -74,7 +75,7 @@ fn filtered_normals_converge_to_the_mapped_image_under_a_sky_without_a_sun() {
             &with(&cfg, NormalMode::Filtered, FilterLobe::Mapped, 32),
         );
         let (smith, _, _) = band_mean(&p, &with(&cfg, NormalMode::Filtered, FilterLobe::Smith, 32));
-        let tolerance = 0.01 * mapped + 4.0 * (se_m * se_m + se_f * se_f).sqrt();
+        let tolerance = 0.005 * mapped + 4.0 * (se_m * se_m + se_f * se_f).sqrt();
         assert!(
             (filtered - mapped).abs() < tolerance,
             "{policy}: filtered {filtered} vs mapped {mapped} (+- {tolerance})"

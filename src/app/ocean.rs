@@ -46,8 +46,9 @@ pub struct LayerSplit {
 }
 
 impl FootprintSlopes {
-    /// The split a filtered render makes for a footprint `width_m` wide, with the default
-    /// filter width.
+    /// The split a filtered render with the `smith` lobe makes of the sea's slopes for a
+    /// footprint `width_m` wide, with the default filter width (the `mapped` lobe splits the
+    /// slopes as read the same way).
     pub fn new(surface: &Surface, width_m: f64) -> FootprintSlopes {
         let slopes = surface.slopes();
         let sigma_m = width_m * crate::config::render::FILTER_WIDTH_BOX as f64;

@@ -21,7 +21,7 @@
 //! models) or the slopes as the lookup reads them ([`SlopeSource::Read`]: each wave's term times
 //! the power the read keeps of it, [`read_power_transfer`]), what the `mapped` lobe models: it
 //! draws the normals the mapped normals of the pixel's own points would have, and bilinear reads
-//! keep some 9 % less slope variance than the spectrum's.
+//! keep some 11 % less slope variance than the realization's on the default sea.
 
 use rayon::prelude::*;
 
