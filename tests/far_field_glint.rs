@@ -19,7 +19,6 @@
 
 use glam::DVec3;
 use vastocean::config::{AnalyticSky, FilterLobe, SceneConfig};
-use vastocean::ocean::slopes::{SlopeSource, SurfaceSlopes};
 use vastocean::render::Camera;
 use vastocean::render::pipeline::prepare;
 use vastocean::sky::{SUN_RADIUS_RAD, SkySource};
@@ -199,14 +198,14 @@ fn blocks(cfg: &SceneConfig) -> Vec<Block> {
     let smith = Setting {
         height_m: cfg.camera.height_m,
         ior: cfg.water.ior as f64,
-        cov: SurfaceSlopes::new(&p.ocean, SlopeSource::Spectrum).total(),
+        cov: p.ocean.slopes().total(),
         sun,
         smith: true,
     };
     // the `mapped` lobe's slopes are the ones the lookup reads
     let by_area = Setting {
         smith: false,
-        cov: SurfaceSlopes::new(&p.ocean, SlopeSource::Read(p.ocean.params().interp)).total(),
+        cov: p.ocean.read_slopes().total(),
         ..smith.clone()
     };
     eprintln!(

@@ -5,10 +5,9 @@
 //! displaced surface (`crate::accel::exact`, found inside the low tessellation's triangles)
 //! shaded with its own tangent plane ([`NormalMode::Geometric`]): the normal that shades is the
 //! geometry's, so a mirror reflection leaves at the elevation it arrived at and no policy is
-//! ever consulted. It
-//! is rendered on the analysed rows only, with `truth_boost` times each pixel's samples, and
-//! every scenario (the paper's baseline included) is measured against it with the same
-//! estimator. The truth is by far a comparison's dearest part and no wrong-side policy touches
+//! ever consulted. It is rendered on the analysed rows only, with `truth_boost` times each
+//! pixel's samples, and every scenario (the paper's baseline included) is measured against it
+//! with the same estimator. The truth is by far a comparison's dearest part and no wrong-side policy touches
 //! it, so `--truth-from DIR` reuses one an earlier comparison of the same scene rendered
 //! (`truth.exr` and `truth.json` say what it is), for a sweep over policies.
 
