@@ -22,6 +22,7 @@ pub mod image_io;
 pub mod lod;
 pub mod memory;
 pub mod mesh;
+pub mod objects;
 pub mod ocean;
 pub mod render;
 pub mod rng;

@@ -110,6 +110,7 @@ fn a_footprint_that_resolves_every_wave_gives_the_mapped_normal() {
         sun: p.sky.sun_light(),
         earth_radius_m: 6_371_000.0,
         sky: &p.sky,
+        objects: None,
     };
     let mut checked = 0;
     for i in 0..64 {

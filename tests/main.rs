@@ -14,6 +14,7 @@ mod far_field_glint;
 mod filtered;
 mod frames;
 mod lod;
+mod objects;
 mod passes;
 mod render;
 mod render_batches;

@@ -64,6 +64,7 @@ pub(crate) fn scene_ref<'a>(
         sun: None,
         earth_radius_m,
         sky,
+        objects: None,
     }
 }
 
@@ -372,6 +373,7 @@ fn skipping_rays_that_cannot_return_changes_no_pixel() {
             sun: None,
             earth_radius_m: 6_371_000.0,
             sky: &sky,
+            objects: None,
         };
         render_image(
             &scene,

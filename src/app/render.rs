@@ -157,6 +157,9 @@ impl fmt::Display for RenderReport {
             "  NaN samples {}, wrong-side directions {}, truncated paths {}, camera rays escaping below the horizon {}",
             self.nan_count, self.wrong_side_count, self.truncated_paths, self.escaped_below_horizon
         )?;
+        for o in &self.objects {
+            writeln!(f, "  object {o}")?;
+        }
         match (&self.pass_file, &self.passes) {
             (Some(file), Some(p)) => write!(
                 f,

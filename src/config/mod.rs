@@ -9,6 +9,7 @@
 
 pub mod camera;
 pub mod lod;
+pub mod objects;
 pub mod ocean;
 pub mod render;
 pub mod sky;
@@ -20,6 +21,7 @@ use thiserror::Error;
 
 pub use camera::{CameraConfig, Projection};
 pub use lod::{LodChoice, LodConfig, Pattern, Reading};
+pub use objects::{ObjectConfig, ShipConfig};
 pub use ocean::OceanParams;
 pub use render::{Backend, FilterLobe, NormalMode, RenderConfig, SurfaceKind, Water, WrongSide};
 pub use sky::{AnalyticSky, SkyConfig};
@@ -173,6 +175,9 @@ pub struct SceneConfig {
     pub sky: SkyConfig,
     pub water: Water,
     pub render: RenderConfig,
+    /// Objects on the sea (`[[object]]`), none by default.
+    #[serde(rename = "object", skip_serializing_if = "Vec::is_empty")]
+    pub objects: Vec<ObjectConfig>,
 }
 
 impl SceneConfig {
@@ -228,6 +233,13 @@ impl SceneConfig {
         {
             cfg.sky.file = Some(dir.join(f));
         }
+        if let (Some(dir), false) = (path.parent(), from_stdin) {
+            for o in &mut cfg.objects {
+                if !o.is_built_in_ship() && o.mesh.is_relative() {
+                    o.mesh = dir.join(&o.mesh);
+                }
+            }
+        }
         Ok(cfg)
     }
 
@@ -241,6 +253,11 @@ impl SceneConfig {
         if let Some(f) = &c.sky.file {
             c.sky.file = Some(std::path::absolute(f).unwrap_or_else(|_| f.clone()));
         }
+        for o in &mut c.objects {
+            if !o.is_built_in_ship() {
+                o.mesh = std::path::absolute(&o.mesh).unwrap_or_else(|_| o.mesh.clone());
+            }
+        }
         toml::to_string(&c)
     }
 
@@ -252,6 +269,9 @@ impl SceneConfig {
         self.lod.validate()?;
         self.camera.validate()?;
         self.sky.validate()?;
+        for (i, o) in self.objects.iter().enumerate() {
+            o.validate(&format!("object[{i}]"))?;
+        }
         let w = &self.water;
         if !(w.ior >= 1.0 && w.ior.is_finite()) {
             return Err(invalid("water.ior", "finite and >= 1", w.ior));

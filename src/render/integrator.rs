@@ -25,9 +25,12 @@ pub use super::counters::Counters;
 pub use super::earth_tilt::{tilt_to_earth, tilt_to_earth_many};
 use super::footprint;
 pub use super::interface::{bend_normal, spawn_ray};
+use super::objects::ObjectScatter;
+use super::shortcuts::Untraced;
 pub use super::shortcuts::{highest_vertex_y, hit_on_triangle, max_slope};
 use crate::accel::{Accel, Hit, Ray};
 use crate::config::{FilterLobe, NormalMode, SceneConfig, Water, WrongSide};
+use crate::objects::SceneObjects;
 use crate::ocean::Sampler;
 use crate::ocean::slopes::SurfaceSlopes;
 use crate::rng::Rng;
@@ -114,6 +117,8 @@ pub struct SceneRef<'a> {
     pub sun: Option<SunLight>,
     pub earth_radius_m: f64,
     pub sky: &'a Sky,
+    /// Objects on the sea, traced beside it (`None`: the sea alone).
+    pub objects: Option<&'a SceneObjects>,
 }
 
 impl SceneRef<'_> {
@@ -255,6 +260,19 @@ impl SceneRef<'_> {
         out: &mut [Vec3],
     ) {
         debug_assert!(entries.len() <= CAMERA_BATCH && out.len() == entries.len());
+        // The objects first: the sea's shortcuts below answer for the sea alone.
+        let mut obj_hits = [None; CAMERA_BATCH];
+        if self.objects.is_some() && segment < settings.max_segments {
+            let mut rays = [PathVertex::NONE.ray; CAMERA_BATCH];
+            for (r, e) in rays.iter_mut().zip(entries) {
+                *r = e.ray;
+            }
+            let n = entries.len();
+            let skip = [false; CAMERA_BATCH];
+            self.object_hits(&rays[..n], &skip[..n], &mut obj_hits[..n], c);
+        }
+        let mut object_entry = [0u8; CAMERA_BATCH];
+        let mut n_object = 0;
         // Answered without the BVH, from the sky (all together), or traced together.
         let mut traced = [PathVertex::NONE.ray; CAMERA_BATCH];
         let mut traced_entry = [0u8; CAMERA_BATCH];
@@ -263,16 +281,26 @@ impl SceneRef<'_> {
         let mut sky_entry = [0u8; CAMERA_BATCH];
         let mut n_sky = 0;
         for (k, e) in entries.iter().enumerate() {
-            match self.answer_untraced(&e.ray, e.in_water, e.parent.is_some(), segment, settings, c)
-            {
-                Untraced::Known(l) => out[k] = l,
-                Untraced::Sky => {
+            let answer =
+                self.answer_untraced(&e.ray, e.in_water, e.parent.is_some(), segment, settings, c);
+            match (answer, obj_hits[k]) {
+                // the sea cannot be in the way
+                (Untraced::Known(_) | Untraced::Sky, Some(_)) => {
+                    object_entry[n_object] = k as u8;
+                    n_object += 1;
+                }
+                (Untraced::Known(l), None) => out[k] = l,
+                (Untraced::Sky, None) => {
                     (sky_org[n_sky], sky_dir[n_sky]) = (e.ray.org.into(), e.ray.dir.into());
                     sky_entry[n_sky] = k as u8;
                     n_sky += 1;
                 }
-                Untraced::Trace => {
+                (Untraced::Trace, object) => {
                     traced[m] = e.ray;
+                    if let Some(h) = object {
+                        // the sea's hit counts only in front of the object's
+                        traced[m].tfar = traced[m].tfar.min(h.t);
+                    }
                     traced_entry[m] = k as u8;
                     m += 1;
                 }
@@ -287,7 +315,7 @@ impl SceneRef<'_> {
                 out[k as usize] = self.weigh_sun(e.ray.org.into(), e.ray.dir.into(), e.sun_pdf, l);
             }
         }
-        if m == 0 {
+        if m == 0 && n_object == 0 {
             return;
         }
         let mut hits = [None; CAMERA_BATCH];
@@ -326,6 +354,18 @@ impl SceneRef<'_> {
             }
         }
 
+        // An object in front of the sea's hit (or with no sea behind it) takes the ray.
+        let mut on_object = [false; CAMERA_BATCH];
+        for (i, &k) in traced_entry[..m].iter().enumerate() {
+            if let Some(oh) = obj_hits[k as usize]
+                && hits[i].is_none_or(|h: Hit| h.t >= oh.t)
+            {
+                (hits[i], on_object[i]) = (None, true);
+                object_entry[n_object] = k;
+                n_object += 1;
+            }
+        }
+
         // Shading at every hit, its normal computed with the others'; what a miss sees.
         let mut widths = [0.0f32; CAMERA_BATCH];
         for ((w, &k), hit) in widths.iter_mut().zip(&traced_entry[..m]).zip(&hits[..m]) {
@@ -348,6 +388,7 @@ impl SceneRef<'_> {
         for (i, (&k, hit)) in traced_entry[..m].iter().zip(&hits[..m]).enumerate() {
             let e = &entries[k as usize];
             match hit {
+                None if on_object[i] => {}
                 None => {
                     let l = self.miss(&e.ray, e.in_water, segment, settings, c);
                     out[k as usize] =
@@ -376,7 +417,27 @@ impl SceneRef<'_> {
             }
         }
         let shaded = &shaded[..n_shaded];
-        let direct = self.sun_through(shaded, c);
+        let mut objects = [(0u8, ObjectScatter::NONE); CAMERA_BATCH];
+        for (o, &k) in objects.iter_mut().zip(&object_entry[..n_object]) {
+            let e = &entries[k as usize];
+            let hit = obj_hits[k as usize].expect("an object entry has its hit");
+            let width = footprint::width_at(e.width_m, settings, hit.t);
+            let rng = &mut rngs[e.sample as usize];
+            *o = (
+                k,
+                self.scatter_object(&e.ray, &hit, e.in_water, width, settings, rng, c),
+            );
+        }
+        let objects = &objects[..n_object];
+        // Nodes 0..n_shaded are the sea's hits, the objects' follow.
+        let mut suns = [None; CAMERA_BATCH];
+        for (sun, s) in suns.iter_mut().zip(shaded.iter().map(|(_, s)| s.sun)) {
+            *sun = s;
+        }
+        for (sun, (_, o)) in suns[n_shaded..].iter_mut().zip(objects) {
+            *sun = o.sun;
+        }
+        let direct = self.sun_through(&suns[..n_shaded + n_object], c);
 
         // The branches: which each hit follows (drawing a sample's random choice here, before
         // its subtrees), then each batch of branches in turn.
@@ -389,10 +450,27 @@ impl SceneRef<'_> {
         }
         let mut l_first = [Vec3::ZERO; CAMERA_BATCH];
         let mut l_second = [Vec3::ZERO; CAMERA_BATCH];
-        for (dirs, l) in [(&first, &mut l_first), (&second, &mut l_second)] {
+        for (pass, (dirs, l)) in [(&first, &mut l_first), (&second, &mut l_second)]
+            .into_iter()
+            .enumerate()
+        {
             let mut batch = [PathVertex::NONE; CAMERA_BATCH];
             let mut of = [0u8; CAMERA_BATCH];
             let mut b = 0;
+            // an object's bounce rides with the first branches
+            for (jo, (k, o)) in objects.iter().enumerate().filter(|_| pass == 0) {
+                let (w, sun_pdf) = o.bounce;
+                batch[b] = PathVertex {
+                    ray: o.sp.spawn(w),
+                    sample: entries[*k as usize].sample,
+                    parent: None,
+                    in_water: o.in_water,
+                    width_m: o.width_m,
+                    sun_pdf,
+                };
+                of[b] = (n_shaded + jo) as u8;
+                b += 1;
+            }
             for (j, (k, s)) in shaded.iter().enumerate() {
                 if let Some((w, in_water, _, sun_pdf)) = dirs[j] {
                     batch[b] = PathVertex {
@@ -432,123 +510,11 @@ impl SceneRef<'_> {
             };
             out[*k as usize] = s.attenuation * (l + direct[j]);
         }
-    }
-
-    /// The sun light sampled at the `shaded` hits that reach the sky: their shadow rays traced
-    /// together (those rising clear of the mesh are not traced), each blocked one dark.
-    fn sun_through(&self, shaded: &[(u8, Scatter)], c: &mut Counters) -> [Vec3; CAMERA_BATCH] {
-        let mut direct = [Vec3::ZERO; CAMERA_BATCH];
-        let mut rays = [PathVertex::NONE.ray; CAMERA_BATCH];
-        let mut of = [0u8; CAMERA_BATCH];
-        let mut n = 0;
-        for (j, (_, s)) in shaded.iter().enumerate() {
-            if let Some((ray, light)) = s.sun {
-                direct[j] = light;
-                let d = Vec3::from(ray.dir);
-                let clear = ray.is_finite()
-                    && (self.skip_above_y.is_some_and(|top| ray.org[1] > top)
-                        || self
-                            .skip_slope
-                            .is_some_and(|k| d.y > k * (d.x * d.x + d.z * d.z).sqrt()));
-                if !clear {
-                    rays[n] = ray;
-                    of[n] = j as u8;
-                    n += 1;
-                }
-            }
-        }
-        if n > 0 {
-            c.sun_rays += n as u64;
-            let mut hits = [None; CAMERA_BATCH];
-            self.accel.intersect_many(&rays[..n], &mut hits[..n]);
-            for (&j, h) in of[..n].iter().zip(&hits[..n]) {
-                if h.is_some() {
-                    c.sun_occluded += 1;
-                    direct[j as usize] = Vec3::ZERO;
-                }
-            }
-        }
-        direct
-    }
-
-    /// Whether a ray is answered without the BVH: cut at `max_segments`, or known to miss the
-    /// surface (the skip shortcuts), which is counted, as is a ray that must be traced.
-    /// `spawned`: the ray leaves a hit (on the side of the triangle it travels in).
-    fn answer_untraced(
-        &self,
-        ray: &Ray,
-        in_water: bool,
-        spawned: bool,
-        segment: u32,
-        settings: &TraceSettings,
-        c: &mut Counters,
-    ) -> Untraced {
-        if segment >= settings.max_segments {
-            c.truncated += 1;
-            return Untraced::Known(Vec3::ZERO);
-        }
-        let d = Vec3::from(ray.dir);
-        if in_water && self.descends_steeply(d) {
-            c.skipped += 1;
-            return Untraced::Known(Vec3::from(settings.upwelling));
-        }
-        // (A ray with a NaN or infinite component is left to the backend, which counts it.)
-        if !in_water
-            && d.y >= 0.0
-            && let Some(top) = self.skip_above_y
-            && ray.org[1] > top
-            && ray.is_finite()
-        {
-            c.skipped_above += 1;
-            return Untraced::Sky;
-        }
-        // The same argument as in the water, mirrored: a ray leaving a hit into the air (so
-        // starting on or above the surface) and rising more steeply than the surface ever
-        // does stays above it. Only spawned rays, whose origins are offset to the air side of
-        // the triangle they leave: a camera is checked to be above the ocean at its nadir, not
-        // above the mesh there (and rising camera rays are mostly skipped above anyway).
-        if !in_water
-            && spawned
-            && let Some(slope) = self.skip_slope
-            && d.y > slope * (d.x * d.x + d.z * d.z).sqrt()
-            && ray.is_finite()
-        {
-            c.skipped_rising += 1;
-            return Untraced::Sky;
-        }
-        c.rays += 1;
-        Untraced::Trace
-    }
-
-    /// What a traced ray that met nothing sees: the sky, or in the water the upwelling light.
-    fn miss(
-        &self,
-        ray: &Ray,
-        in_water: bool,
-        segment: u32,
-        settings: &TraceSettings,
-        c: &mut Counters,
-    ) -> Vec3 {
-        let d = Vec3::from(ray.dir);
-        if segment == 0 && !in_water && d.y < settings.must_hit_below_y {
-            c.escaped_below_horizon += 1;
-        }
-        if in_water {
-            Vec3::from(settings.upwelling)
-        } else {
-            self.sky.radiance(Vec3::from(ray.org), d)
+        for (jo, (k, o)) in objects.iter().enumerate() {
+            let j = n_shaded + jo;
+            out[*k as usize] = o.weight * l_first[j] + o.attenuation * direct[j];
         }
     }
-}
-
-/// How [`SceneRef::answer_untraced`] answers a ray.
-enum Untraced {
-    /// Its radiance, known without the BVH.
-    Known(Vec3),
-    /// It cannot meet the surface: the sky's radiance along it.
-    Sky,
-    /// The BVH must find its hit.
-    Trace,
 }
 
 /// One ray of a batch in [`SceneRef::radiance_batch`]: sample `sample`'s ray, spawned on

@@ -28,6 +28,8 @@ pub enum RenderError {
     NoEmbree,
     #[error(transparent)]
     Image(#[from] ImageError),
+    #[error(transparent)]
+    Objects(#[from] crate::objects::ObjectError),
     #[error("cannot start the worker threads")]
     Threads(#[from] rayon::ThreadPoolBuildError),
     #[error(

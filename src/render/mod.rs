@@ -13,6 +13,7 @@ mod interface;
 mod limits;
 pub mod microfacet;
 mod normals;
+mod objects;
 pub mod pipeline;
 pub mod pixel_state;
 pub mod report;

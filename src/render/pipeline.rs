@@ -22,24 +22,14 @@ use crate::accel::exact::{Exact, ExactSurface};
 use crate::accel::{Accel, tracing_pool};
 use crate::config::{Backend, SceneConfig, SurfaceKind};
 use crate::lod::{EARTH_RADIUS_M, LodParams, LodStats, tessellate};
+use crate::objects::SceneObjects;
 use crate::ocean::Surface;
 use crate::sky::Sky;
 
-/// The height of the sea surface right under the camera, m: the point whose displaced position
-/// lies at the camera's nadir (found by fixed-point iteration on the horizontal displacement,
-/// which converges where the surface does not fold).
+/// The height of the sea surface right under the camera, m (see
+/// [`crate::objects::surface_height_at`]).
 pub fn surface_height_at_nadir(sampler: &crate::ocean::Sampler) -> f64 {
-    let (mut u, mut v) = (0.0f32, 0.0f32);
-    for _ in 0..16 {
-        let s = sampler.sample(u, v);
-        let (nu, nv) = (-s.disp[0], -s.disp[1]);
-        let moved = (nu - u).abs().max((nv - v).abs());
-        (u, v) = (nu, nv);
-        if moved < 1e-4 {
-            break;
-        }
-    }
-    sampler.sample(u, v).height as f64
+    crate::objects::surface_height_at(sampler, 0.0, 0.0)
 }
 
 /// Builds the sky a scene asks for.
@@ -82,6 +72,10 @@ pub struct Prepared {
     pub threads: usize,
     pool: rayon::ThreadPool,
     camera_position_m: [f64; 2],
+    /// The objects on the sea, placed at the ocean's time, and what placed them.
+    pub objects: Option<SceneObjects>,
+    object_configs: Vec<crate::config::ObjectConfig>,
+    backend: Backend,
 }
 
 /// How [`prepare_with`] builds a scene.
@@ -276,6 +270,18 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
             }
         };
     bar.finish_and_clear();
+    let sampler = ocean.sampler(cfg.camera.position_m);
+    let objects = pool.install(|| {
+        let r = lod.earth_radius_m;
+        SceneObjects::build(
+            &cfg.objects,
+            &sampler,
+            cfg.camera.position_m,
+            r,
+            cfg.render.backend,
+            threads,
+        )
+    })?;
     let sky_irradiance = sky.irradiance();
     Ok(Prepared {
         ocean,
@@ -293,6 +299,9 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
         threads,
         pool,
         camera_position_m: cfg.camera.position_m,
+        objects,
+        object_configs: cfg.objects.clone(),
+        backend: cfg.render.backend,
     })
 }
 
@@ -359,6 +368,14 @@ impl Prepared {
         (self.skip_slope, self.skip_above_y) = self
             .pool
             .install(|| (max_slope(mesh), highest_vertex_y(mesh)));
+        if self.object_configs.iter().any(|o| o.float) {
+            let (r, cam, threads) = (earth_r, self.camera_position_m, self.threads);
+            let configs = &self.object_configs;
+            let backend = self.backend;
+            self.objects = self
+                .pool
+                .install(|| SceneObjects::build(configs, &sampler, cam, r, backend, threads))?;
+        }
         let seconds_geometry = t.elapsed().as_secs_f64() - seconds_refit;
         Ok(FrameUpdate {
             seconds_ocean,
@@ -438,7 +455,12 @@ impl Prepared {
         });
         let scene_ref = SceneRef {
             slopes,
-            sun: if filtered { self.sky.sun_light() } else { None },
+            // sampled at rough hits of filtered normals and at objects' hits
+            sun: if filtered || self.objects.is_some() {
+                self.sky.sun_light()
+            } else {
+                None
+            },
             accel: self.accel.as_ref(),
             skip_slope: self.skip_slope,
             skip_above_y: self.skip_above_y,
@@ -446,6 +468,7 @@ impl Prepared {
             ocean: Some(sampler),
             earth_radius_m: self.lod.earth_radius_m,
             sky: &self.sky,
+            objects: self.objects.as_ref(),
         };
         check_memory(cfg, 0, batches, keep_states)?;
         let mut settings = TraceSettings::new(cfg, self.sky_irradiance);
@@ -530,6 +553,7 @@ impl Prepared {
             sky_irradiance: self.sky_irradiance.to_array(),
             upwelling: cfg.water.upwelling(self.sky_irradiance).to_array(),
             counters: c,
+            objects: self.objects.as_ref().map_or_else(Vec::new, |o| o.report()),
             passes: None,
             pass_file: None,
             exr: PathBuf::new(),

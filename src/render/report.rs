@@ -101,6 +101,9 @@ pub struct RenderReport {
     pub sky_irradiance: [f32; 3],
     pub upwelling: [f32; 3],
     pub counters: Counters,
+    /// The objects on the sea and where they were placed.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub objects: Vec<crate::objects::ObjectReport>,
     /// For a pass or a merge of passes: which.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub passes: Option<PassInfo>,

@@ -1,8 +1,11 @@
-//! Bounds of a mesh that let the integrator skip rays that cannot meet it, and the
-//! triangle test that answers a camera ray on its pixel's predicted triangle.
+//! Bounds of a mesh that let the integrator skip rays that cannot meet it, the triangle test
+//! that answers a camera ray on its pixel's predicted triangle, and the integrator's answers
+//! to the rays it need not trace.
 
 use glam::Vec3;
 
+use super::counters::Counters;
+use super::integrator::{SceneRef, TraceSettings};
 use crate::accel::{Hit, Ray};
 use crate::mesh::Mesh;
 
@@ -71,4 +74,85 @@ pub fn hit_on_triangle(ray: &Ray, tri: [Vec3; 3], prim: u32) -> Option<Hit> {
     // Written so that a NaN (a ray parallel to the triangle) is a miss.
     let inside = u >= 0.0 && v >= 0.0 && u + v <= 1.0;
     (inside && t >= ray.tnear && t <= ray.tfar && t.is_finite()).then_some(Hit { t, prim, u, v })
+}
+
+impl SceneRef<'_> {
+    /// Whether a ray is answered without the BVH: cut at `max_segments`, or known to miss the
+    /// surface (the skip shortcuts), which is counted, as is a ray that must be traced.
+    /// `spawned`: the ray leaves a hit (on the side of the triangle it travels in).
+    pub(super) fn answer_untraced(
+        &self,
+        ray: &Ray,
+        in_water: bool,
+        spawned: bool,
+        segment: u32,
+        settings: &TraceSettings,
+        c: &mut Counters,
+    ) -> Untraced {
+        if segment >= settings.max_segments {
+            c.truncated += 1;
+            return Untraced::Known(Vec3::ZERO);
+        }
+        let d = Vec3::from(ray.dir);
+        if in_water && self.descends_steeply(d) {
+            c.skipped += 1;
+            return Untraced::Known(Vec3::from(settings.upwelling));
+        }
+        // (A ray with a NaN or infinite component is left to the backend, which counts it.)
+        if !in_water
+            && d.y >= 0.0
+            && let Some(top) = self.skip_above_y
+            && ray.org[1] > top
+            && ray.is_finite()
+        {
+            c.skipped_above += 1;
+            return Untraced::Sky;
+        }
+        // The same argument as in the water, mirrored: a ray leaving a hit into the air (so
+        // starting on or above the surface) and rising more steeply than the surface ever
+        // does stays above it. Only spawned rays, whose origins are offset to the air side of
+        // the triangle they leave: a camera is checked to be above the ocean at its nadir, not
+        // above the mesh there (and rising camera rays are mostly skipped above anyway).
+        if !in_water
+            && spawned
+            && let Some(slope) = self.skip_slope
+            && d.y > slope * (d.x * d.x + d.z * d.z).sqrt()
+            && ray.is_finite()
+        {
+            c.skipped_rising += 1;
+            return Untraced::Sky;
+        }
+        c.rays += 1;
+        Untraced::Trace
+    }
+
+    /// What a traced ray that met nothing sees: the sky, or in the water the upwelling light.
+    pub(super) fn miss(
+        &self,
+        ray: &Ray,
+        in_water: bool,
+        segment: u32,
+        settings: &TraceSettings,
+        c: &mut Counters,
+    ) -> Vec3 {
+        let d = Vec3::from(ray.dir);
+        if segment == 0 && !in_water && d.y < settings.must_hit_below_y {
+            c.escaped_below_horizon += 1;
+        }
+        if in_water {
+            Vec3::from(settings.upwelling)
+        } else {
+            self.sky.radiance(Vec3::from(ray.org), d)
+        }
+    }
+}
+
+/// How [`SceneRef::answer_untraced`] answers a ray.
+pub(super) enum Untraced {
+    /// Its radiance, known without the BVH.
+    Known(Vec3),
+    /// It cannot meet the surface: the sky's radiance along it.
+    Sky,
+    /// The BVH must find its hit.
+    Trace,
 }

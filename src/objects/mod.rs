@@ -1,0 +1,319 @@
+//! Objects on the sea: their meshes (the built-in Wigley ship, or OBJ / PLY files), placed at
+//! their world positions on the curved earth, floating on the waves where asked
+//! ([`float`]), and gathered into one triangle mesh with its own acceleration structure beside
+//! the ocean's (the ocean's tessellation is untouched). The integrator traces both and takes
+//! the nearer hit (`crate::render::objects`).
+
+pub mod float;
+pub mod load;
+pub mod ship;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use glam::{DMat3, DVec3, Vec3};
+use thiserror::Error;
+
+use crate::accel::{Accel, Ray, bvh::Bvh};
+use crate::config::{Backend, ObjectConfig};
+use crate::lod::curved_frame_position;
+use crate::mesh::Mesh;
+use crate::ocean::Sampler;
+use float::Plane;
+
+#[derive(Debug, Error)]
+pub enum ObjectError {
+    #[error("object mesh {}: {message}", path.display())]
+    Mesh { path: PathBuf, message: String },
+    #[error("the objects' {backend} acceleration structure: {message}")]
+    Accel {
+        backend: &'static str,
+        message: String,
+    },
+}
+
+/// A mesh in its object's frame (m; bow +x, up +y, design waterline y = 0).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LocalMesh {
+    pub positions: Vec<[f64; 3]>,
+    pub triangles: Vec<[u32; 3]>,
+    /// Parts with their own reflectance: triangles from `.0` on (to the next part) take `.1`
+    /// instead of the object's `albedo` (the built-in ship's deckhouse).
+    pub parts: Vec<(usize, [f64; 3])>,
+}
+
+impl LocalMesh {
+    /// At least one triangle, finite positions, indices within them.
+    pub fn check(&self) -> Result<(), String> {
+        if self.triangles.is_empty() {
+            return Err("holds no triangle".into());
+        }
+        if let Some(i) = self
+            .positions
+            .iter()
+            .position(|p| !p.iter().all(|c| c.is_finite()))
+        {
+            return Err(format!("vertex {i} is not finite: {:?}", self.positions[i]));
+        }
+        let n = self.positions.len();
+        if let Some((t, &i)) = self
+            .triangles
+            .iter()
+            .enumerate()
+            .find_map(|(t, tri)| tri.iter().find(|&&i| i as usize >= n).map(|i| (t, i)))
+        {
+            return Err(format!(
+                "triangle {t} names vertex {i}, and the mesh has {n} vertices"
+            ));
+        }
+        Ok(())
+    }
+
+    /// The mesh an object's configuration names.
+    pub fn of(cfg: &ObjectConfig) -> Result<LocalMesh, ObjectError> {
+        if cfg.is_built_in_ship() {
+            Ok(ship::wigley_ship(&cfg.ship))
+        } else {
+            load::read_mesh(&cfg.mesh)
+        }
+    }
+}
+
+/// One object as placed for a render.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlacedObject {
+    pub name: String,
+    /// The sea's plane under it (floating objects; `None` for fixed ones).
+    pub plane: Option<Plane>,
+    /// Its mesh's origin in the scene (camera-relative x, z; y above mean sea level), m.
+    pub origin: [f64; 3],
+    /// Its triangles in the scene's mesh: `first..first + count`.
+    pub first_triangle: u32,
+    pub triangle_count: u32,
+}
+
+/// All objects of a scene in one mesh, with the structure that traces it.
+pub struct SceneObjects {
+    pub accel: Box<dyn Accel>,
+    /// Each triangle's object (an index into `placed`).
+    pub object_of: Vec<u32>,
+    /// Each triangle's diffuse reflectance, linear RGB.
+    pub albedo_of: Vec<Vec3>,
+    pub placed: Vec<PlacedObject>,
+    /// The mesh's bounds, a hair wider: rays that miss them are not traced.
+    lo: Vec3,
+    hi: Vec3,
+    /// Seconds reading, placing and building took.
+    pub build_seconds: f64,
+}
+
+impl SceneObjects {
+    /// Places the objects of `configs` on the sea of `sampler` (camera-relative, camera at
+    /// world `camera_m`) and builds their structure with `backend` on `threads` threads
+    /// (0 = all). `None` when there are no objects.
+    pub fn build(
+        configs: &[ObjectConfig],
+        sampler: &Sampler,
+        camera_m: [f64; 2],
+        earth_radius_m: f64,
+        backend: Backend,
+        threads: usize,
+    ) -> Result<Option<SceneObjects>, ObjectError> {
+        if configs.is_empty() {
+            return Ok(None);
+        }
+        let t = std::time::Instant::now();
+        let (mut positions, mut indices) = (Vec::new(), Vec::new());
+        let (mut object_of, mut albedo_of) = (Vec::new(), Vec::new());
+        let mut placed = Vec::with_capacity(configs.len());
+        for (k, cfg) in configs.iter().enumerate() {
+            let local = LocalMesh::of(cfg)?;
+            let rel = [
+                cfg.position_m[0] - camera_m[0],
+                cfg.position_m[1] - camera_m[1],
+            ];
+            let heading = cfg.heading_deg.to_radians();
+            let (sin_h, cos_h) = heading.sin_cos();
+            // object frame (x forward, z starboard) -> the local tangent frame's (x, z)
+            let turn = |x: f64, z: f64| [x * cos_h - z * sin_h, x * sin_h + z * cos_h];
+            let (plane, rotation, lift) = if cfg.float {
+                let points = float::waterplane_points(&local, cfg.scale);
+                let heights: Vec<f64> = points
+                    .iter()
+                    .map(|p| {
+                        let d = turn(p[0], p[1]);
+                        surface_height_at(sampler, (rel[0] + d[0]) as f32, (rel[1] + d[1]) as f32)
+                    })
+                    .collect();
+                let plane = float::fit_plane(&points, &heights);
+                (Some(plane), plane.rotation(), plane.heave)
+            } else {
+                (None, DMat3::IDENTITY, cfg.height_m)
+            };
+            let base = positions.len() as u32;
+            let first_triangle = indices.len() as u32;
+            for p in &local.positions {
+                let v = rotation * (DVec3::from(*p) * cfg.scale);
+                let d = turn(v.x, v.z);
+                let w =
+                    curved_frame_position(rel[0], rel[1], [d[0], v.y + lift, d[1]], earth_radius_m);
+                positions.push(w.map(|c| c as f32));
+            }
+            indices.extend(local.triangles.iter().map(|t| t.map(|i| base + i)));
+            object_of.extend(std::iter::repeat_n(k as u32, local.triangles.len()));
+            let albedo = |a: [f64; 3]| Vec3::from(a.map(|c| c as f32));
+            let mut own = albedo(cfg.albedo);
+            for t in 0..local.triangles.len() {
+                if let Some(&(_, a)) = local.parts.iter().rev().find(|(from, _)| *from <= t) {
+                    own = albedo(a);
+                }
+                albedo_of.push(own);
+            }
+            placed.push(PlacedObject {
+                name: cfg.display_name(k),
+                plane,
+                origin: curved_frame_position(rel[0], rel[1], [0.0, lift, 0.0], earth_radius_m),
+                first_triangle,
+                triangle_count: local.triangles.len() as u32,
+            });
+        }
+        let (lo, hi) = positions.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(Vec3::from(*p)), hi.max(Vec3::from(*p))),
+        );
+        let pad = 1e-3 + 1e-6 * lo.abs().max(hi.abs()).max_element();
+        let mesh = Mesh::new(positions, Vec::new(), Vec::new(), indices).map_err(|e| {
+            ObjectError::Accel {
+                backend: "mesh",
+                message: e.to_string(),
+            }
+        })?;
+        let accel = build_accel(Arc::new(mesh), backend, threads)?;
+        Ok(Some(SceneObjects {
+            accel,
+            object_of,
+            albedo_of,
+            placed,
+            lo: lo - pad,
+            hi: hi + pad,
+            build_seconds: t.elapsed().as_secs_f64(),
+        }))
+    }
+
+    /// Whether `ray` may meet an object: it crosses the objects' bounds within its range.
+    #[inline]
+    pub fn may_hit(&self, ray: &Ray) -> bool {
+        let (o, d) = (Vec3::from(ray.org), Vec3::from(ray.dir));
+        let inv = d.recip();
+        let (t0, t1) = ((self.lo - o) * inv, (self.hi - o) * inv);
+        let near = t0.min(t1).max_element().max(ray.tnear);
+        let far = t0.max(t1).min_element().min(ray.tfar);
+        // NaN (a zero direction component through a slab's plane) counts as a possible hit
+        near <= far || near.is_nan() || far.is_nan()
+    }
+
+    /// The object a triangle of the mesh belongs to.
+    pub fn object(&self, prim: u32) -> &PlacedObject {
+        &self.placed[self.object_of[prim as usize] as usize]
+    }
+}
+
+/// An object as a render's report gives it.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ObjectReport {
+    pub name: String,
+    pub triangles: u32,
+    /// Its mesh's origin in the scene (camera-relative x, z; y above mean sea level), m.
+    pub origin_m: [f64; 3],
+    /// Floating: the sea's plane under it as heave (m), pitch (bow up) and roll (starboard
+    /// up), degrees; absent for a fixed object.
+    pub heave_m: Option<f64>,
+    pub pitch_deg: Option<f64>,
+    pub roll_deg: Option<f64>,
+}
+
+impl SceneObjects {
+    /// Each object's placement, for the render's report.
+    pub fn report(&self) -> Vec<ObjectReport> {
+        self.placed
+            .iter()
+            .map(|o| {
+                let pose = o.plane.map(|p| (p.heave, p.pitch_roll_deg()));
+                ObjectReport {
+                    name: o.name.clone(),
+                    triangles: o.triangle_count,
+                    origin_m: o.origin,
+                    heave_m: pose.map(|p| p.0),
+                    pitch_deg: pose.map(|p| p.1.0),
+                    roll_deg: pose.map(|p| p.1.1),
+                }
+            })
+            .collect()
+    }
+}
+
+impl std::fmt::Display for ObjectReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [x, y, z] = self.origin_m;
+        write!(
+            f,
+            "{} ({} triangles) at x {x:.1}, z {z:.1} m",
+            self.name, self.triangles
+        )?;
+        match (self.heave_m, self.pitch_deg, self.roll_deg) {
+            (Some(h), Some(p), Some(r)) => {
+                write!(
+                    f,
+                    ", floating: heave {h:+.2} m, pitch {p:+.2} deg, roll {r:+.2} deg"
+                )
+            }
+            _ => write!(f, ", fixed {y:.2} m above the sea"),
+        }
+    }
+}
+
+/// The height of the sea surface at camera-relative horizontal position (x, z), m: the point
+/// whose displaced position lies there (fixed-point iteration on the horizontal displacement,
+/// which converges where the surface does not fold), in the local tangent frame.
+pub fn surface_height_at(sampler: &Sampler, x: f32, z: f32) -> f64 {
+    let (mut u, mut v) = (x, z);
+    for _ in 0..16 {
+        let s = sampler.sample(u, v);
+        let (nu, nv) = (x - s.disp[0], z - s.disp[1]);
+        let moved = (nu - u).abs().max((nv - v).abs());
+        (u, v) = (nu, nv);
+        if moved < 1e-4 {
+            break;
+        }
+    }
+    sampler.sample(u, v).height as f64
+}
+
+/// The structure over `mesh` a backend builds (`threads`: Embree's device's).
+#[cfg_attr(not(feature = "embree"), allow(unused_variables))]
+pub fn build_accel(
+    mesh: Arc<Mesh>,
+    backend: Backend,
+    threads: usize,
+) -> Result<Box<dyn Accel>, ObjectError> {
+    match backend {
+        Backend::Rust => Ok(Box::new(Bvh::build(mesh))),
+        #[cfg(feature = "embree")]
+        Backend::Embree => {
+            use crate::accel::embree::{BuildOptions, Device, Scene};
+            let err = |e: crate::accel::embree::EmbreeError| ObjectError::Accel {
+                backend: "embree",
+                message: e.to_string(),
+            };
+            let device = Device::new(threads).map_err(err)?;
+            Ok(Box::new(
+                Scene::new(&device, mesh, BuildOptions::default()).map_err(err)?,
+            ))
+        }
+        #[cfg(not(feature = "embree"))]
+        Backend::Embree => Err(ObjectError::Accel {
+            backend: "embree",
+            message: "this build has no Embree (built without the `embree` feature)".into(),
+        }),
+    }
+}

@@ -1,0 +1,237 @@
+//! Objects in the path tracer ([`crate::objects`]): their hits beside the ocean's, their
+//! shading (Lambertian: the sun sampled by next-event estimation and weighed by the power
+//! heuristic against a cosine-weighted bounce, which carries its density so that the sun it
+//! finds itself gets the complementary weight), and shadow rays that both the sea and the
+//! objects block.
+//!
+//! Every ray the integrator would answer without the ocean's BVH (the skip shortcuts: a ray
+//! that cannot meet the sea) is still tested against the objects first, so a ship above the
+//! highest wave or under the water is seen by rays the sea's shortcuts skip. Where the
+//! objects' bounds are missed nothing is traced.
+
+use glam::Vec3;
+
+use super::counters::Counters;
+use super::integrator::{CAMERA_BATCH, SceneRef, TraceSettings};
+use super::interface::{SurfacePoint, surface_point};
+use super::microfacet::power_heuristic;
+use crate::accel::{Hit, Ray};
+use crate::rng::Rng;
+
+/// What an object hit does to a path.
+#[derive(Clone, Copy)]
+pub(super) struct ObjectScatter {
+    pub(super) sp: SurfacePoint,
+    /// The diffuse reflectance times the attenuation of the segment that reached the hit.
+    pub(super) weight: Vec3,
+    /// The water's attenuation of that segment alone (for the sun's direct light, which the
+    /// hit reflects with its albedo already in it).
+    pub(super) attenuation: Vec3,
+    pub(super) in_water: bool,
+    pub(super) width_m: f32,
+    /// The bounce's direction and the density the sun it finds is weighed with (0: full).
+    pub(super) bounce: (Vec3, f32),
+    /// The sun's sampled direct light: the shadow ray and the radiance it brings if clear.
+    pub(super) sun: Option<(Ray, Vec3)>,
+}
+
+impl ObjectScatter {
+    pub(super) const NONE: ObjectScatter = ObjectScatter {
+        sp: SurfacePoint {
+            p: Vec3::ZERO,
+            ng: Vec3::Y,
+            err: Vec3::ZERO,
+            prim: 0,
+        },
+        weight: Vec3::ZERO,
+        attenuation: Vec3::ZERO,
+        in_water: false,
+        width_m: 0.0,
+        bounce: (Vec3::Y, 0.0),
+        sun: None,
+    };
+}
+
+impl SceneRef<'_> {
+    /// The object hits of `rays` into `hits` (all `None` without objects); rays whose `skip`
+    /// is set, and rays that miss the objects' bounds, are not traced.
+    pub(super) fn object_hits(
+        &self,
+        rays: &[Ray],
+        skip: &[bool],
+        hits: &mut [Option<Hit>],
+        c: &mut Counters,
+    ) {
+        hits.iter_mut().for_each(|h| *h = None);
+        let Some(objects) = self.objects else {
+            return;
+        };
+        let mut traced = [Ray::new([0.0; 3], [0.0, 1.0, 0.0]); CAMERA_BATCH];
+        let mut of = [0u8; CAMERA_BATCH];
+        let mut n = 0;
+        for (i, (ray, &skip)) in rays.iter().zip(skip).enumerate() {
+            if !skip && ray.is_finite() && objects.may_hit(ray) {
+                traced[n] = *ray;
+                of[n] = i as u8;
+                n += 1;
+            }
+        }
+        if n == 0 {
+            return;
+        }
+        c.object_rays += n as u64;
+        let mut found = [None; CAMERA_BATCH];
+        objects.accel.intersect_many(&traced[..n], &mut found[..n]);
+        for (&i, h) in of[..n].iter().zip(found) {
+            hits[i as usize] = h;
+        }
+    }
+
+    /// Shading at an object hit of `ray` (travelling in the water when `in_water`): the
+    /// Lambertian bounce, drawn cosine-weighted from `rng`, and in the air the sun sampled
+    /// (two more numbers, drawn first).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn scatter_object(
+        &self,
+        ray: &Ray,
+        hit: &Hit,
+        in_water: bool,
+        width_m: f32,
+        settings: &TraceSettings,
+        rng: &mut Rng,
+        c: &mut Counters,
+    ) -> ObjectScatter {
+        let objects = self.objects.expect("object hits come from the objects");
+        c.object_hits += 1;
+        let sp = surface_point(objects.accel.mesh(), hit);
+        let d = Vec3::from(ray.dir);
+        // the side the ray came from (both sides of an object's triangle are its surface)
+        let n = if d.dot(sp.ng) > 0.0 { -sp.ng } else { sp.ng };
+        let albedo = objects.albedo_of[hit.prim as usize];
+        let attenuation = if in_water {
+            settings.water.transmittance(hit.t)
+        } else {
+            Vec3::ONE
+        };
+        let mut sun = None;
+        let sun_sampled = !in_water && self.sun.is_some();
+        if let (Some(light), false) = (&self.sun, in_water) {
+            let s = light.sample(sp.p, rng.f32(), rng.f32());
+            let cos = n.dot(s.d);
+            if cos > 0.0 && s.pdf > 0.0 {
+                let radiance = light.radiance(&s);
+                let w = power_heuristic(s.pdf, cos * std::f32::consts::FRAC_1_PI);
+                let l = albedo * std::f32::consts::FRAC_1_PI * radiance * (cos * w / s.pdf);
+                sun = Some((sp.spawn(s.d), l));
+            }
+        }
+        let (w, cos) = cosine_direction(n, rng.f32(), rng.f32());
+        let bounce_pdf = if sun_sampled {
+            cos * std::f32::consts::FRAC_1_PI
+        } else {
+            0.0
+        };
+        ObjectScatter {
+            sp,
+            weight: attenuation * albedo,
+            attenuation,
+            in_water,
+            width_m,
+            bounce: (w, bounce_pdf),
+            sun,
+        }
+    }
+
+    /// The sun light sampled at up to [`CAMERA_BATCH`] hits, `suns[j]` = (shadow ray, light):
+    /// the shadow rays traced together against the sea (those rising clear of its mesh are
+    /// not) and the objects, each blocked one dark.
+    pub(super) fn sun_through(
+        &self,
+        suns: &[Option<(Ray, Vec3)>],
+        c: &mut Counters,
+    ) -> [Vec3; CAMERA_BATCH] {
+        let mut direct = [Vec3::ZERO; CAMERA_BATCH];
+        let mut rays = [Ray::new([0.0; 3], [0.0, 1.0, 0.0]); CAMERA_BATCH];
+        let mut of = [0u8; CAMERA_BATCH];
+        let mut n = 0;
+        let mut all = [Ray::new([0.0; 3], [0.0, 1.0, 0.0]); CAMERA_BATCH];
+        let mut none = [true; CAMERA_BATCH];
+        for (j, sun) in suns.iter().enumerate() {
+            if let Some((ray, light)) = *sun {
+                direct[j] = light;
+                (all[j], none[j]) = (ray, false);
+                let d = Vec3::from(ray.dir);
+                let clear = ray.is_finite()
+                    && (self.skip_above_y.is_some_and(|top| ray.org[1] > top)
+                        || self
+                            .skip_slope
+                            .is_some_and(|k| d.y > k * (d.x * d.x + d.z * d.z).sqrt()));
+                if !clear {
+                    rays[n] = ray;
+                    of[n] = j as u8;
+                    n += 1;
+                }
+            }
+        }
+        if n > 0 {
+            c.sun_rays += n as u64;
+            let mut hits = [None; CAMERA_BATCH];
+            self.accel.intersect_many(&rays[..n], &mut hits[..n]);
+            for (&j, h) in of[..n].iter().zip(&hits[..n]) {
+                if h.is_some() {
+                    c.sun_occluded += 1;
+                    direct[j as usize] = Vec3::ZERO;
+                    none[j as usize] = true;
+                }
+            }
+        }
+        if self.objects.is_some() {
+            let m = suns.len();
+            let mut hits = [None; CAMERA_BATCH];
+            self.object_hits(&all[..m], &none[..m], &mut hits[..m], c);
+            for (j, h) in hits[..m].iter().enumerate() {
+                if h.is_some() {
+                    c.sun_occluded += 1;
+                    direct[j] = Vec3::ZERO;
+                }
+            }
+        }
+        direct
+    }
+}
+
+/// A direction about unit `n` with density cos / pi, from two uniform numbers, and its cosine.
+fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> (Vec3, f32) {
+    let r = u1.sqrt();
+    let (s, c) = (std::f32::consts::TAU * u2).sin_cos();
+    let cos = (1.0 - u1).max(0.0).sqrt();
+    let (t, b) = n.any_orthonormal_pair();
+    ((r * c * t + r * s * b + cos * n).normalize(), cos)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Cosine-weighted directions: on n's side, with E[cos] = 2/3 and no mean sideways.
+    #[test]
+    fn cosine_directions_have_the_cosine_density() {
+        let n = Vec3::new(0.3, -0.8, 0.52).normalize();
+        let mut rng = Rng::keyed(&[7]);
+        let count = 200_000;
+        let (mut sum_cos, mut side) = (0.0f64, Vec3::ZERO);
+        for _ in 0..count {
+            let (w, cos) = cosine_direction(n, rng.f32(), rng.f32());
+            assert!((w.dot(n) - cos).abs() < 1e-5 && cos >= 0.0);
+            sum_cos += cos as f64;
+            side += w - w.dot(n) * n;
+        }
+        let mean = sum_cos / count as f64;
+        // std of cos under this density is sqrt(1/2 - 4/9) = 0.236
+        assert!(
+            (mean - 2.0 / 3.0).abs() < 5.0 * 0.236 / (count as f64).sqrt(),
+            "{mean}"
+        );
+        assert!(side.length() / (count as f32) < 0.01, "{side}");
+    }
+}

@@ -1,0 +1,219 @@
+//! Objects on the sea: the ship's hits on every backend against the brute-force oracle, where
+//! floating puts it, and the light a diffuse object reflects.
+
+use glam::Vec3;
+use vastocean::accel::brute::BruteForce;
+use vastocean::accel::{Accel, Ray};
+use vastocean::config::{AnalyticSky, Backend, ObjectConfig, Projection, SceneConfig, ShipConfig};
+use vastocean::objects::SceneObjects;
+use vastocean::render::pipeline::prepare;
+use vastocean::rng::Rng;
+
+/// A scene with one ship at world (x, z), heading 30 degrees.
+fn ship_scene(x: f64, z: f64, float: bool) -> SceneConfig {
+    SceneConfig {
+        objects: vec![ObjectConfig {
+            position_m: [x, z],
+            heading_deg: 30.0,
+            float,
+            ..ObjectConfig::default()
+        }],
+        ..SceneConfig::default()
+    }
+}
+
+fn placed(cfg: &SceneConfig, backend: Backend) -> SceneObjects {
+    let p = prepare(cfg).expect("the scene prepares");
+    let sampler = p.ocean.sampler(cfg.camera.position_m);
+    let r = p.lod.earth_radius_m;
+    SceneObjects::build(&cfg.objects, &sampler, cfg.camera.position_m, r, backend, 2)
+        .expect("the objects build")
+        .expect("one object")
+}
+
+/// Rays from around the ship at its points: every backend finds the brute-force oracle's
+/// triangle (or a neighbour at the same distance, on a shared edge) at its distance.
+#[test]
+fn the_ship_is_hit_alike_by_every_backend_and_the_oracle() {
+    let cfg = ship_scene(60.0, -20.0, true);
+    let objects = placed(&cfg, Backend::Rust);
+    let mesh = objects.accel.mesh().clone();
+    let oracle = BruteForce::new(mesh.clone());
+    let mut rng = Rng::keyed(&[35, 1]);
+    let rays: Vec<Ray> = (0..4000)
+        .map(|i| {
+            let target = Vec3::from(mesh.positions()[i * 7 % mesh.vertex_count()])
+                + 0.3 * Vec3::from(rng.unit_vector());
+            let org = target + 30.0 * Vec3::from(rng.unit_vector()) + Vec3::new(0.0, 5.0, 0.0);
+            Ray::new(org.to_array(), (target - org).normalize().to_array())
+        })
+        .collect();
+    let mut hits = 0;
+    for accel in vastocean_backends(mesh) {
+        for ray in &rays {
+            let (a, b) = (accel.intersect(ray), oracle.intersect(ray));
+            match (a, b) {
+                (Some(a), Some(b)) => {
+                    hits += 1;
+                    assert!(
+                        (a.t - b.t).abs() <= 1e-4 * b.t.max(1.0),
+                        "{}: t {} against the oracle's {} (prims {} and {})",
+                        accel.name(),
+                        a.t,
+                        b.t,
+                        a.prim,
+                        b.prim
+                    );
+                }
+                (None, None) => {}
+                (a, b) => panic!("{}: {a:?} against the oracle's {b:?}", accel.name()),
+            }
+        }
+    }
+    assert!(hits > 2000, "most rays aim at the ship: {hits} hits");
+}
+
+fn vastocean_backends(mesh: vastocean::mesh::Mesh) -> Vec<Box<dyn Accel>> {
+    crate::common::backends(mesh)
+}
+
+/// On a calm sea (1 mm RMS) the floating ship sits at its design waterline: its keel at the
+/// draft below mean sea level (within the millimetre and the earth's curvature at its 60 m).
+/// On the default sea it lies on the least-squares plane through the surface under it: its
+/// heave between the lowest and highest of those heights, pitch and roll under 10 degrees.
+#[test]
+fn a_floating_ship_sits_at_its_draft_on_a_calm_sea_and_on_the_waves_on_a_rough_one() {
+    let mut calm = ship_scene(60.0, 0.0, true);
+    calm.ocean.rms_m = Some(0.001);
+    let objects = placed(&calm, Backend::Rust);
+    let keel = objects
+        .accel
+        .mesh()
+        .positions()
+        .iter()
+        .map(|p| p[1])
+        .fold(f32::INFINITY, f32::min) as f64;
+    let draft = ShipConfig::default().draft_m;
+    assert!(
+        (keel + draft).abs() < 0.005,
+        "keel at {keel} m, draft {draft} m"
+    );
+    let plane = objects.placed[0].plane.expect("it floats");
+    assert!(plane.heave.abs() < 0.005, "{plane:?}");
+
+    let rough = ship_scene(60.0, 0.0, true);
+    let p = prepare(&rough).unwrap();
+    let sampler = p.ocean.sampler(rough.camera.position_m);
+    let objects = placed(&rough, Backend::Rust);
+    let plane = objects.placed[0].plane.expect("it floats");
+    let local = vastocean::objects::LocalMesh::of(&rough.objects[0]).unwrap();
+    let (s, c) = 30f64.to_radians().sin_cos();
+    let heights: Vec<f64> = vastocean::objects::float::waterplane_points(&local, 1.0)
+        .iter()
+        .map(|q| {
+            let (x, z) = (60.0 + q[0] * c - q[1] * s, q[0] * s + q[1] * c);
+            vastocean::objects::surface_height_at(&sampler, x as f32, z as f32)
+        })
+        .collect();
+    let (lo, hi) = heights
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &h| {
+            (a.min(h), b.max(h))
+        });
+    assert!(
+        hi - lo > 0.05,
+        "the default sea has waves under the hull: {lo}..{hi}"
+    );
+    assert!(
+        lo <= plane.heave && plane.heave <= hi,
+        "{plane:?} outside {lo}..{hi}"
+    );
+    let (pitch, roll) = plane.pitch_roll_deg();
+    assert!(pitch.abs() < 10.0 && roll.abs() < 10.0, "{pitch} {roll}");
+    // the fixed ship stays where it is put
+    let fixed = placed(&ship_scene(60.0, 0.0, false), Backend::Rust);
+    assert!(fixed.placed[0].plane.is_none());
+}
+
+/// A camera looking straight down at the deck of a ship held 50 m above the sea: the deck
+/// sees the whole sky and nothing else, so a Lambertian deck of albedo a has radiance
+/// a E / pi, E the sky's downwelling irradiance. Under a uniform sky of 1 every sample is
+/// exactly a; under the clear sky with its sun (sampled by next-event estimation and weighed
+/// against the bounce by multiple importance) the mean agrees with a E / pi within its noise
+/// and the irradiance's own quadrature.
+#[test]
+fn a_deck_under_the_open_sky_reflects_its_irradiance() {
+    let albedo = 0.6;
+    let mut cfg = SceneConfig::default();
+    cfg.camera.height_m = 80.0;
+    cfg.camera.width = 48;
+    cfg.camera.aspect = 1.0;
+    cfg.camera.projection = Projection::Pinhole {
+        hfov_deg: 6.0,
+        yaw_deg: 0.0,
+        pitch_deg: -90.0,
+    };
+    cfg.render.spp = 64;
+    cfg.objects = vec![ObjectConfig {
+        float: false,
+        height_m: 50.0,
+        albedo: [albedo; 3],
+        ship: ShipConfig {
+            deckhouse_m: 0.0,
+            ..ShipConfig::default()
+        },
+        ..ObjectConfig::default()
+    }];
+    cfg.sky.analytic = AnalyticSky::Uniform { radiance: [1.0; 3] };
+    let p = prepare(&cfg).unwrap();
+    let r = p.render(&cfg, false).unwrap();
+    for px in &r.film.image.pixels {
+        for c in px {
+            assert!((c - albedo as f32).abs() < 1e-5, "{px:?}");
+        }
+    }
+
+    let mut sunny = cfg.clone();
+    sunny.sky = vastocean::config::SkyConfig::default();
+    let p = prepare(&sunny).unwrap();
+    let irradiance = p.sky.irradiance();
+    assert!(p.sky.sun_light().is_some(), "the default sky has a sun");
+    let r = p.render(&sunny, false).unwrap();
+    let lum = |c: [f32; 3]| vastocean::color::luminance(c) as f64;
+    let n = r.film.image.pixels.len() as f64;
+    let mean = r.film.image.pixels.iter().map(|&c| lum(c)).sum::<f64>() / n;
+    let se = (r.film.var_y.iter().map(|&v| v as f64).sum::<f64>()).sqrt() / n;
+    let expected = albedo * lum(irradiance.to_array()) / std::f64::consts::PI;
+    assert!(
+        (mean - expected).abs() < 4.0 * se + 0.005 * expected,
+        "deck {mean:.5} +- {se:.5}, a E / pi = {expected:.5}"
+    );
+}
+
+/// An animation moves a floating ship with the sea: at another time its pose is that time's
+/// (the same as a scene prepared at that time directly), and a fixed one stays put.
+#[test]
+fn a_floating_ship_moves_with_the_sea_from_frame_to_frame() {
+    let mut cfg = ship_scene(60.0, 0.0, true);
+    cfg.objects.push(ObjectConfig {
+        float: false,
+        position_m: [-80.0, 10.0],
+        ..ObjectConfig::default()
+    });
+    let mut p = vastocean::render::pipeline::prepare_for_frames(&cfg).unwrap();
+    let before = p.objects.as_ref().unwrap().report();
+    p.advance_to(3.0, cfg.camera.height_m).unwrap();
+    let after = p.objects.as_ref().unwrap().report();
+    assert_ne!(
+        before[0], after[0],
+        "the sea moved in 3 s, and the ship with it"
+    );
+    assert_eq!(before[1], after[1], "a fixed object stays where it was put");
+    let mut at_3 = cfg.clone();
+    at_3.ocean.time_s = 3.0;
+    let direct = prepare(&at_3).unwrap().objects.unwrap().report();
+    for (a, b) in after.iter().zip(&direct) {
+        let heave = a.heave_m.zip(b.heave_m).map(|(x, y)| (x - y).abs());
+        assert!(heave.is_none_or(|d| d < 1e-4), "{a:?} against {b:?}");
+    }
+}
