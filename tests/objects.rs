@@ -217,3 +217,134 @@ fn a_floating_ship_moves_with_the_sea_from_frame_to_frame() {
         assert!(heave.is_none_or(|d| d < 1e-4), "{a:?} against {b:?}");
     }
 }
+
+/// A 2 m cube held 5 m up and 20 m ahead of a pinhole camera at its height: each pixel whose
+/// centre ray meets the cube's front face (x = 19 m) has id 1, depth the distance to that face
+/// and normal -x; the sky above the horizon is -1 at infinite depth, the water below 0; the
+/// bounding box in the sidecar is the box of those pixels.
+#[test]
+fn the_layers_for_training_data_see_a_known_box() {
+    let dir = std::env::temp_dir().join(format!("vastocean-aov-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cube = dir.join("cube.obj");
+    let mut obj = String::new();
+    for k in 0..8 {
+        let c = |bit: usize| if k & bit == 0 { -1.0 } else { 1.0 };
+        obj += &format!("v {} {} {}\n", c(1), c(2), c(4));
+    }
+    for f in [
+        [1, 5, 7, 3],
+        [2, 4, 8, 6],
+        [1, 2, 6, 5],
+        [3, 7, 8, 4],
+        [1, 3, 4, 2],
+        [5, 6, 8, 7],
+    ] {
+        obj += &format!("f {} {} {} {}\n", f[0], f[1], f[2], f[3]);
+    }
+    std::fs::write(&cube, obj).unwrap();
+    let mut cfg = SceneConfig::default();
+    cfg.camera.height_m = 5.0;
+    cfg.camera.width = 96;
+    cfg.camera.aspect = 2.0;
+    cfg.camera.projection = Projection::Pinhole {
+        hfov_deg: 30.0,
+        yaw_deg: 0.0,
+        pitch_deg: 0.0,
+    };
+    cfg.render.spp = 1;
+    cfg.render.aovs = vec![
+        vastocean::config::Aov::Depth,
+        vastocean::config::Aov::Normal,
+        vastocean::config::Aov::Id,
+    ];
+    cfg.objects = vec![ObjectConfig {
+        mesh: cube.clone(),
+        position_m: [20.0, 0.0],
+        height_m: 5.0,
+        float: false,
+        ..ObjectConfig::default()
+    }];
+    let p = prepare(&cfg).unwrap();
+    let r = p.render(&cfg, false).unwrap();
+    let (w, h) = (r.camera.width, r.camera.height);
+    let id = r.aovs.id.as_ref().unwrap();
+    let depth = r.aovs.depth.as_ref().unwrap();
+    let [nx, ny, nz] = r.aovs.normal.as_ref().unwrap();
+    let (mut lo, mut hi) = ([usize::MAX; 2], [0usize; 2]);
+    let mut checked = [0; 3];
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            let d = r.camera.direction(x as f32 + 0.5, y as f32 + 0.5);
+            let t = 19.0 / d.x;
+            let (py, pz) = (5.0 + t * d.y, t * d.z);
+            // inside the face, clear of its edges by a hair (curvature and rounding)
+            let inside = (py - 5.0).abs() < 0.99 && pz.abs() < 0.99;
+            let outside = (py - 5.0).abs() > 1.01 || pz.abs() > 1.01;
+            if inside {
+                assert_eq!(id[i], 1.0, "pixel {x},{y}");
+                assert!((depth[i] - t).abs() < 1e-3, "{x},{y}: {} vs {t}", depth[i]);
+                assert!((nx[i] + 1.0).abs() < 1e-4 && ny[i].abs() < 1e-4 && nz[i].abs() < 1e-4);
+                lo = [lo[0].min(x), lo[1].min(y)];
+                hi = [hi[0].max(x), hi[1].max(y)];
+                checked[0] += 1;
+            } else if outside && d.y > 0.0 {
+                assert_eq!(id[i], -1.0, "sky at {x},{y}");
+                assert!(depth[i].is_infinite());
+                checked[1] += 1;
+            } else if outside && d.y < -0.05 {
+                assert_eq!(id[i], 0.0, "water at {x},{y}");
+                assert!(depth[i].is_finite() && ny[i] > 0.0);
+                checked[2] += 1;
+            }
+        }
+    }
+    assert!(checked.iter().all(|&n| n > 100), "{checked:?}");
+    let b = r.report.objects[0].bbox_px.expect("the box is seen");
+    for (got, want) in [(b[0], lo[0]), (b[1], lo[1])] {
+        assert!(
+            got <= want && want - got <= 1,
+            "{b:?} against {lo:?}..{hi:?}"
+        );
+    }
+    for (got, want) in [(b[2], hi[0]), (b[3], hi[1])] {
+        assert!(
+            got >= want && got - want <= 1,
+            "{b:?} against {lo:?}..{hi:?}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Bad objects are refused as bad input (exit 2) with the key or the file named, and the
+/// layers are refused beside `--pass` (a pass holds samples, not layers).
+#[test]
+fn bad_objects_and_layers_in_passes_are_refused_with_their_reasons() {
+    let dir = std::env::temp_dir().join(format!("vastocean-badobj-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("s.toml");
+    let out = dir.join("out").to_string_lossy().to_string();
+    for (object, says) in [
+        ("mesh = \"hull.stl\"", "object[0].mesh"),
+        ("mesh = \"missing.obj\"", "missing.obj"),
+        ("albedo = [1.5, 0.5, 0.5]", "object[0].albedo"),
+        ("ship = { beam_m = 50.0 }", "object[0].ship.beam_m"),
+    ] {
+        std::fs::write(&scene, format!("[[object]]\n{object}\n")).unwrap();
+        let s = scene.to_string_lossy().to_string();
+        let args = [
+            "render", "--config", &s, "--width", "64", "--spp", "1", "--out", &out,
+        ];
+        let (code, _, err) = crate::common::vastocean(&args);
+        assert_eq!(code, 2, "{object}: {err}");
+        assert!(err.contains(says), "{object}: {err}");
+    }
+    let args = [
+        "render", "--aov", "id", "--pass", "1/2", "--width", "64", "--out", &out,
+    ];
+    let (code, _, err) = crate::common::vastocean(&args);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--pass"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -260,8 +260,10 @@ pub fn run(job: &FramesJob) -> Result<SequenceReport, AppError> {
         let image = &r.film.image;
         let (exposure, stops) = png_exposure(report.png_exposure_stops, image);
         report.png_exposure_stops = Some(stops);
+        let mut channels = vec![("Y.variance", &r.film.var_y[..])];
+        channels.extend(r.aovs.channels());
         let staged = vec![
-            stage_exr_with(&exr, image, &[("Y.variance", &r.film.var_y)])?,
+            stage_exr_with(&exr, image, &channels)?,
             stage_png(&png, image, exposure)?,
         ];
         commit_all(staged)?;

@@ -133,7 +133,10 @@ impl From<crate::render::pipeline::RenderError> for AppError {
             RenderError::Image(e) => e.into(),
             RenderError::NoEmbree
             | RenderError::CameraUnderwater { .. }
-            | RenderError::Folded { .. } => AppError::Input(e.into()),
+            | RenderError::Folded { .. }
+            | RenderError::Objects(crate::objects::ObjectError::Mesh { .. }) => {
+                AppError::Input(e.into())
+            }
             _ => AppError::Run(e.into()),
         }
     }

@@ -31,6 +31,12 @@ pub fn run(job: &RenderJob) -> Result<RenderReport, AppError> {
     job.scene.validate()?;
     super::check_prefix(&job.out)?;
     if let Some((k, n)) = job.pass {
+        if !job.scene.render.aovs.is_empty() {
+            return Err(AppError::input(
+                "render.aovs (--aov) is written by a whole render, not by its passes: \
+                 render the layers without --pass (one sample per pixel is enough)",
+            ));
+        }
         return run_pass(job, k, n);
     }
     let (exr, png, json) = (
@@ -41,7 +47,9 @@ pub fn run(job: &RenderJob) -> Result<RenderReport, AppError> {
     check_outputs(&[exr.clone(), png.clone(), json.clone()])?;
     let mut r = render_scene(&job.scene, job.progress)?;
     let image = &r.film.image;
-    let staged_exr = stage_exr_with(&exr, image, &[("Y.variance", &r.film.var_y)])?;
+    let mut channels = vec![("Y.variance", &r.film.var_y[..])];
+    channels.extend(r.aovs.channels());
+    let staged_exr = stage_exr_with(&exr, image, &channels)?;
     let (exposure, stops) = png_exposure(job.scene.render.exposure, image);
     r.report.png_exposure_stops = Some(stops);
     let staged_png = stage_png(&png, image, exposure)?;

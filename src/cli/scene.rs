@@ -228,6 +228,11 @@ pub struct RenderArgs {
     /// The sidecar reports what was used as `png_exposure_stops`. The EXR is never scaled.
     #[arg(long, value_parser = parse_exposure, allow_hyphen_values = true)]
     exposure: Option<Exposure>,
+    /// Layers for training data, comma-separated: `depth` (EXR channel Z, m), `normal`
+    /// (N.X N.Y N.Z), `id` (-1 sky, 0 water, k the k-th object; the JSON gives each object's
+    /// 2-D box). From each pixel's centre ray (docs/objects.md)
+    #[arg(long, value_delimiter = ',', value_parser = choice::<vastocean::config::Aov>())]
+    aov: Option<Vec<vastocean::config::Aov>>,
     /// Output prefix: writes PREFIX.exr, PREFIX.png and PREFIX.json.
     #[arg(long, default_value = "out/render")]
     out: PathBuf,
@@ -296,6 +301,9 @@ impl RenderArgs {
         cfg.render.normals = self.normals.unwrap_or(cfg.render.normals);
         cfg.render.filter_width = self.filter_width.unwrap_or(cfg.render.filter_width);
         cfg.render.filter_lobe = self.filter_lobe.unwrap_or(cfg.render.filter_lobe);
+        if let Some(aovs) = &self.aov {
+            cfg.render.aovs = aovs.clone();
+        }
         if let Some(Exposure(e)) = self.exposure {
             cfg.render.exposure = e;
         }

@@ -23,7 +23,9 @@ pub use camera::{CameraConfig, Projection};
 pub use lod::{LodChoice, LodConfig, Pattern, Reading};
 pub use objects::{ObjectConfig, ShipConfig};
 pub use ocean::OceanParams;
-pub use render::{Backend, FilterLobe, NormalMode, RenderConfig, SurfaceKind, Water, WrongSide};
+pub use render::{
+    Aov, Backend, FilterLobe, NormalMode, RenderConfig, SurfaceKind, Water, WrongSide,
+};
 pub use sky::{AnalyticSky, SkyConfig};
 
 #[derive(Debug, Error)]

@@ -144,7 +144,26 @@ pub struct RenderConfig {
     /// mid grey; an animation takes its first frame's. The EXR is never scaled.
     #[serde(with = "exposure")]
     pub exposure: Option<f32>,
+    /// Layers for training data written beside the image as further EXR channels, from each
+    /// pixel's centre ray (docs/objects.md, "Layers for training data").
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub aovs: Vec<Aov>,
 }
+
+/// A layer of training data (`render.aovs`, `--aov`): what each pixel's centre ray meets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Aov {
+    /// `Z`: the distance to the first hit, m (+inf for the sky).
+    Depth,
+    /// `N.X N.Y N.Z`: the shading normal there (the water's air side up, an object's facing
+    /// the camera; 0 for the sky).
+    Normal,
+    /// `id`: -1 the sky, 0 the water, k the k-th object of the file.
+    Id,
+}
+
+super::choice!(Aov { Depth => "depth", Normal => "normal", Id => "id" });
 
 /// `render.exposure` in a file: a number of stops, or `"auto"`.
 mod exposure {
@@ -208,6 +227,7 @@ impl Default for RenderConfig {
             wrong_side: WrongSide::default(),
             compact_bvh: true,
             exposure: None,
+            aovs: Vec::new(),
         }
     }
 }

@@ -19,6 +19,7 @@ use crate::config::{Backend, ObjectConfig};
 use crate::lod::curved_frame_position;
 use crate::mesh::Mesh;
 use crate::ocean::Sampler;
+use crate::render::aov::AovLayers;
 use float::Plane;
 
 #[derive(Debug, Error)]
@@ -221,6 +222,8 @@ impl SceneObjects {
 /// An object as a render's report gives it.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ObjectReport {
+    /// Its value in the `id` layer (its place in the scene file, from 1).
+    pub id: u32,
     pub name: String,
     pub triangles: u32,
     /// Its mesh's origin in the scene (camera-relative x, z; y above mean sea level), m.
@@ -230,22 +233,36 @@ pub struct ObjectReport {
     pub heave_m: Option<f64>,
     pub pitch_deg: Option<f64>,
     pub roll_deg: Option<f64>,
+    /// With an `id` layer: the pixels it covers, `[x_min, y_min, x_max, y_max]` inclusive
+    /// (absent when no pixel's centre ray meets it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bbox_px: Option<[usize; 4]>,
 }
 
 impl SceneObjects {
     /// Each object's placement, for the render's report.
     pub fn report(&self) -> Vec<ObjectReport> {
+        self.report_with(&AovLayers::default(), 1)
+    }
+
+    /// [`Self::report`] with each object's bounding box in `aovs`' id layer, if it has one,
+    /// over an image `width` pixels wide.
+    pub fn report_with(&self, aovs: &AovLayers, width: usize) -> Vec<ObjectReport> {
+        let boxes = aovs.bboxes(width, self.placed.len());
         self.placed
             .iter()
-            .map(|o| {
+            .enumerate()
+            .map(|(k, o)| {
                 let pose = o.plane.map(|p| (p.heave, p.pitch_roll_deg()));
                 ObjectReport {
+                    id: k as u32 + 1,
                     name: o.name.clone(),
                     triangles: o.triangle_count,
                     origin_m: o.origin,
                     heave_m: pose.map(|p| p.0),
                     pitch_deg: pose.map(|p| p.1.0),
                     roll_deg: pose.map(|p| p.1.1),
+                    bbox_px: boxes.as_ref().and_then(|b| b[k]),
                 }
             })
             .collect()
@@ -255,19 +272,18 @@ impl SceneObjects {
 impl std::fmt::Display for ObjectReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let [x, y, z] = self.origin_m;
-        write!(
-            f,
-            "{} ({} triangles) at x {x:.1}, z {z:.1} m",
-            self.name, self.triangles
-        )?;
+        let (id, name, n) = (self.id, &self.name, self.triangles);
+        write!(f, "{id} {name} ({n} triangles) at x {x:.1}, z {z:.1} m")?;
         match (self.heave_m, self.pitch_deg, self.roll_deg) {
-            (Some(h), Some(p), Some(r)) => {
-                write!(
-                    f,
-                    ", floating: heave {h:+.2} m, pitch {p:+.2} deg, roll {r:+.2} deg"
-                )
-            }
-            _ => write!(f, ", fixed {y:.2} m above the sea"),
+            (Some(h), Some(p), Some(r)) => write!(
+                f,
+                ", floating: heave {h:+.2} m, pitch {p:+.2} deg, roll {r:+.2} deg"
+            )?,
+            _ => write!(f, ", fixed {y:.2} m above the sea")?,
+        }
+        match self.bbox_px {
+            Some([x0, y0, x1, y1]) => write!(f, ", in pixels {x0}..={x1} x {y0}..={y1}"),
+            None => Ok(()),
         }
     }
 }

@@ -262,7 +262,10 @@ impl SceneRef<'_> {
         debug_assert!(entries.len() <= CAMERA_BATCH && out.len() == entries.len());
         // The objects first: the sea's shortcuts below answer for the sea alone.
         let mut obj_hits = [None; CAMERA_BATCH];
-        if self.objects.is_some() && segment < settings.max_segments {
+        if let Some(objects) = self.objects
+            && segment < settings.max_segments
+            && entries.iter().any(|e| objects.may_hit(&e.ray))
+        {
             let mut rays = [PathVertex::NONE.ray; CAMERA_BATCH];
             for (r, e) in rays.iter_mut().zip(entries) {
                 *r = e.ray;

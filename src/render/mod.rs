@@ -2,6 +2,7 @@
 //! branching and normal mapping, the film that turns paths into pixels, and the pipeline that
 //! runs a scene from ocean to image. The sky light lives in [`crate::sky`].
 
+pub mod aov;
 mod bsdf;
 pub mod camera;
 pub mod counters;

@@ -185,8 +185,8 @@ impl SceneRef<'_> {
                 }
             }
         }
-        if self.objects.is_some() {
-            let m = suns.len();
+        let m = suns.len();
+        if self.objects.is_some() && none[..m].contains(&false) {
             let mut hits = [None; CAMERA_BATCH];
             self.object_hits(&all[..m], &none[..m], &mut hits[..m], c);
             for (j, h) in hits[..m].iter().enumerate() {

@@ -488,6 +488,8 @@ impl Prepared {
                 progress,
             )
         });
+        let (h, aovs) = (cfg.camera.height_m as f32, &cfg.render.aovs);
+        let aovs = (self.pool).install(|| scene_ref.aov_layers(&camera, h, aovs, &settings));
         let seconds_trace = t.elapsed().as_secs_f64();
         if let Some(message) = self.accel.take_error() {
             return Err(RenderError::Trace {
@@ -553,7 +555,8 @@ impl Prepared {
             sky_irradiance: self.sky_irradiance.to_array(),
             upwelling: cfg.water.upwelling(self.sky_irradiance).to_array(),
             counters: c,
-            objects: self.objects.as_ref().map_or_else(Vec::new, |o| o.report()),
+            objects: (self.objects.as_ref())
+                .map_or_else(Vec::new, |o| o.report_with(&aovs, camera.width)),
             passes: None,
             pass_file: None,
             exr: PathBuf::new(),
@@ -566,6 +569,7 @@ impl Prepared {
                 film,
                 camera,
                 report,
+                aovs,
             },
             states,
         ))

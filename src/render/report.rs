@@ -121,6 +121,8 @@ pub struct Rendered {
     pub film: Film,
     pub camera: Camera,
     pub report: RenderReport,
+    /// The layers for training data the scene asked for (`render.aovs`).
+    pub aovs: super::aov::AovLayers,
 }
 
 /// What a render warns of: the sea state's validity, folding and holes.
