@@ -221,7 +221,8 @@ fn a_floating_ship_moves_with_the_sea_from_frame_to_frame() {
 /// A 2 m cube held 5 m up and 20 m ahead of a pinhole camera at its height: each pixel whose
 /// centre ray meets the cube's front face (x = 19 m) has id 1, depth the distance to that face
 /// and normal -x; the sky above the horizon is -1 at infinite depth, the water below 0; the
-/// bounding box in the sidecar is the box of those pixels.
+/// bounding box in the sidecar is the box of those pixels; the sidecar's horizon row parts
+/// sky from water in every column.
 #[test]
 fn the_layers_for_training_data_see_a_known_box() {
     let dir = std::env::temp_dir().join(format!("vastocean-aov-{}", std::process::id()));
@@ -301,6 +302,22 @@ fn the_layers_for_training_data_see_a_known_box() {
         }
     }
     assert!(checked.iter().all(|&n| n > 100), "{checked:?}");
+    // the sidecar's horizon parts the sky from the water, a pixel either side of it
+    let rows = r
+        .report
+        .horizon_row_px
+        .as_ref()
+        .expect("a pinhole has a horizon");
+    assert_eq!(rows.len(), w);
+    for (x, row) in rows.iter().enumerate() {
+        let row = row.expect("a level camera sees the horizon in every column");
+        if (lo[0].saturating_sub(2)..=hi[0] + 2).contains(&x) {
+            continue; // the box stands in front of the horizon
+        }
+        let (above, below) = (row.floor() as usize - 1, row.ceil() as usize + 1);
+        assert_eq!(id[above * w + x], -1.0, "column {x}: horizon at row {row}");
+        assert_eq!(id[below * w + x], 0.0, "column {x}: horizon at row {row}");
+    }
     let b = r.report.objects[0].bbox_px.expect("the box is seen");
     for (got, want) in [(b[0], lo[0]), (b[1], lo[1])] {
         assert!(

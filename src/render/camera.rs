@@ -123,6 +123,46 @@ impl Camera {
     }
 }
 
+impl Camera {
+    /// For a pinhole camera `camera_height_m` above a smooth sea on an earth of radius
+    /// `earth_radius_m`: the row (fractional, 0 at the image's top edge) where the horizon
+    /// crosses each column's centre, `None` where it lies outside the image (or the column
+    /// never meets it). The horizon dips below the level by acos(R / (R + h)). `None` for the
+    /// equirectangular camera, whose rows are elevations.
+    pub fn horizon_rows(
+        &self,
+        camera_height_m: f64,
+        earth_radius_m: f64,
+    ) -> Option<Vec<Option<f32>>> {
+        if !matches!(self.projection, Projection::Pinhole { .. }) {
+            return None;
+        }
+        let dip = (earth_radius_m / (earth_radius_m + camera_height_m)).acos();
+        let target = -(dip.sin() as f32);
+        let h = self.height as f32;
+        let rows = (0..self.width)
+            .map(|x| {
+                let el = |y: f32| self.direction(x as f32 + 0.5, y).y;
+                // the elevation falls down a column (an unrolled pinhole): bisect its crossing
+                let (mut lo, mut hi) = (0.0f32, h);
+                if !(el(lo) >= target && el(hi) <= target) {
+                    return None;
+                }
+                for _ in 0..40 {
+                    let mid = 0.5 * (lo + hi);
+                    if el(mid) > target {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                Some(0.5 * (lo + hi))
+            })
+            .collect();
+        Some(rows)
+    }
+}
+
 /// Narrowest equirectangular image whose pixels span under 0.01 rad (2 pi / 629), where
 /// [`PixelRays`] adds a sample's offset by series; narrower ones call [`Camera::direction`].
 const MIN_SERIES_WIDTH: usize = 629;
@@ -171,6 +211,46 @@ impl PixelRays<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A level pinhole's horizon lies tan(dip) below the image's middle, in image-plane units
+    /// of tan(hfov / 2) per half width; a camera pitched up by more than half its vertical field
+    /// of view has none in its image; the equirectangular camera gives none.
+    #[test]
+    fn the_horizon_row_of_a_pinhole_is_the_dip_below_its_middle() {
+        let (w, h_m, r) = (400, 50.0, 6.371e6);
+        let cam = |pitch_deg| {
+            Camera::new(
+                Projection::Pinhole {
+                    hfov_deg: 40.0,
+                    yaw_deg: 10.0,
+                    pitch_deg,
+                },
+                w,
+                2.0,
+            )
+        };
+        let c = cam(0.0);
+        let rows = c.horizon_rows(h_m, r).unwrap();
+        let dip = (r / (r + h_m)).acos();
+        let tan_half = 20f64.to_radians().tan();
+        // at the middle column: sy = -tan(dip) (the direction (1, sy) has y / |.| = -sin(dip))
+        let expect = 0.5 * c.height as f64 * (1.0 + dip.tan() / (tan_half * 0.5));
+        let mid = rows[w / 2].unwrap() as f64;
+        assert!(
+            (mid - expect).abs() < 0.05 * (w as f64 / 400.0) + 0.02,
+            "{mid} vs {expect}"
+        );
+        assert!(rows.iter().all(|r| r.is_some()));
+        assert!(
+            cam(30.0)
+                .horizon_rows(h_m, r)
+                .unwrap()
+                .iter()
+                .all(|r| r.is_none())
+        );
+        let pano = Camera::new(Projection::Equirect { band_deg: None }, 64, 2.0);
+        assert!(pano.horizon_rows(h_m, r).is_none());
+    }
 
     #[test]
     fn equirect_band_rows_map_exactly_to_elevations() {

@@ -555,6 +555,7 @@ impl Prepared {
             sky_irradiance: self.sky_irradiance.to_array(),
             upwelling: cfg.water.upwelling(self.sky_irradiance).to_array(),
             counters: c,
+            horizon_row_px: camera.horizon_rows(cfg.camera.height_m, self.lod.earth_radius_m),
             objects: (self.objects.as_ref())
                 .map_or_else(Vec::new, |o| o.report_with(&aovs, camera.width)),
             passes: None,

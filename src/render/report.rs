@@ -101,6 +101,10 @@ pub struct RenderReport {
     pub sky_irradiance: [f32; 3],
     pub upwelling: [f32; 3],
     pub counters: Counters,
+    /// A pinhole image's horizon: per column, the row (fractional, from the top edge) where
+    /// the smooth sea's horizon crosses the column's centre, null outside the image.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub horizon_row_px: Option<Vec<Option<f32>>>,
     /// The objects on the sea and where they were placed.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub objects: Vec<crate::objects::ObjectReport>,

@@ -337,6 +337,37 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
         },
         Extra::Furnace,
     );
+    // A white Lambertian ship floating in view, and a white box held over the camera's
+    // nadir filling the lower sky: light between the sea and the objects may bounce many
+    // times, and still no pixel may exceed the sky's 1.
+    add(
+        "furnace-objects",
+        "white furnace",
+        "uniform sky 1, white ship and box".into(),
+        &|s| {
+            furnace(s);
+            let white = [1.0; 3];
+            s.objects = vec![
+                crate::config::ObjectConfig {
+                    position_m: [30.0, 10.0],
+                    albedo: white,
+                    ship: crate::config::ShipConfig {
+                        deckhouse_albedo: white,
+                        ..Default::default()
+                    },
+                    ..Default::default()
+                },
+                crate::config::ObjectConfig {
+                    position_m: [0.0, -12.0],
+                    height_m: 3.0,
+                    float: false,
+                    albedo: white,
+                    ..Default::default()
+                },
+            ];
+        },
+        Extra::Furnace,
+    );
     // Crossings of extremes.
     add(
         "height-10000-pinhole-down",
