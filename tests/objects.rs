@@ -152,6 +152,7 @@ fn a_deck_under_the_open_sky_reflects_its_irradiance() {
         hfov_deg: 6.0,
         yaw_deg: 0.0,
         pitch_deg: -90.0,
+        roll_deg: 0.0,
     };
     cfg.render.spp = 64;
     cfg.objects = vec![ObjectConfig {
@@ -252,6 +253,7 @@ fn the_layers_for_training_data_see_a_known_box() {
         hfov_deg: 30.0,
         yaw_deg: 0.0,
         pitch_deg: 0.0,
+        roll_deg: 0.0,
     };
     cfg.render.spp = 1;
     cfg.render.aovs = vec![

@@ -268,6 +268,7 @@ fn vertex_and_mapped_differ_on_a_coarse_mesh_and_agree_on_a_fine_one() {
             hfov_deg: 50.0,
             yaw_deg: 0.0,
             pitch_deg: -60.0,
+            roll_deg: 0.0,
         },
         48,
         1.0,

@@ -268,7 +268,7 @@ pub fn merge(job: &MergeJob) -> Result<RenderReport, AppError> {
     r.noise_rms = film.noise_rms();
     r.noise_rms_relative = film.noise_rms().map(|v| v / mean_luminance(&film.image));
     let camera = crate::render::Camera::new(
-        r.config.camera.projection,
+        r.config.camera.aimed(),
         r.config.camera.width,
         r.config.camera.aspect,
     );

@@ -10,8 +10,10 @@ pub enum Projection {
     /// Full sphere; `band_deg = Some((top, bottom))` renders only elevations from `top` down to
     /// `bottom` degrees (e.g. (1, -6)) at the full-sphere pixel pitch.
     Equirect { band_deg: Option<(f64, f64)> },
-    /// Pinhole with horizontal field of view, looking at azimuth `yaw_deg`, elevation `pitch_deg`.
-    /// Absent keys: 60 degrees wide, looking along azimuth 0, level.
+    /// Pinhole with horizontal field of view, looking at azimuth `yaw_deg`, elevation `pitch_deg`,
+    /// turned about its view by `roll_deg` (positive: its right side down). Absent keys: 60
+    /// degrees wide, looking along azimuth 0, level, upright. (`camera.look_at_m` sets the yaw
+    /// and pitch instead.)
     Pinhole {
         #[serde(default = "pinhole_hfov_deg")]
         hfov_deg: f64,
@@ -19,6 +21,8 @@ pub enum Projection {
         yaw_deg: f64,
         #[serde(default)]
         pitch_deg: f64,
+        #[serde(default)]
+        roll_deg: f64,
     },
 }
 
@@ -39,6 +43,10 @@ pub struct CameraConfig {
     /// Width / height of a pinhole image.
     pub aspect: f64,
     pub projection: Projection,
+    /// A pinhole aimed at this point (world x, height above mean sea level, z; m) instead of
+    /// by its yaw and pitch.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub look_at_m: Option<[f64; 3]>,
 }
 
 impl Default for CameraConfig {
@@ -49,11 +57,53 @@ impl Default for CameraConfig {
             width: 2048,
             aspect: 16.0 / 9.0,
             projection: Projection::Equirect { band_deg: None },
+            look_at_m: None,
         }
     }
 }
 
+/// A pinhole's forward, right and up directions for its yaw, pitch and roll (radians): the
+/// level right is (-sin yaw, 0, cos yaw); roll turns right and up about forward, right side
+/// down for a positive roll.
+pub fn pinhole_basis64(yaw: f64, pitch: f64, roll: f64) -> [glam::DVec3; 3] {
+    let fwd = crate::equirect::direction64(pitch, yaw);
+    let right = glam::DVec3::new(-yaw.sin(), 0.0, yaw.cos());
+    let up = right.cross(fwd);
+    if roll == 0.0 {
+        return [fwd, right, up];
+    }
+    let (s, c) = roll.sin_cos();
+    [fwd, c * right - s * up, s * right + c * up]
+}
+
 impl CameraConfig {
+    /// The projection as rendered: a pinhole with `look_at_m` gets the yaw and pitch that
+    /// look from the camera (at `position_m`, `height_m` up) at that point; otherwise the
+    /// projection as given.
+    pub fn aimed(&self) -> Projection {
+        match (self.projection, self.look_at_m) {
+            (
+                Projection::Pinhole {
+                    hfov_deg, roll_deg, ..
+                },
+                Some([x, y, z]),
+            ) => {
+                let d = glam::DVec3::new(
+                    x - self.position_m[0],
+                    y - self.height_m,
+                    z - self.position_m[1],
+                );
+                Projection::Pinhole {
+                    hfov_deg,
+                    yaw_deg: d.z.atan2(d.x).to_degrees(),
+                    pitch_deg: d.y.atan2(d.x.hypot(d.z)).to_degrees(),
+                    roll_deg,
+                }
+            }
+            (p, _) => p,
+        }
+    }
+
     /// The azimuths (degrees) under which a pinhole camera sees the sea: `(centre, half_width)`
     /// of the directions of its image that point below the horizontal. `None` when it sees the
     /// sea all round (the equirectangular camera; a pinhole whose image holds the nadir).
@@ -69,14 +119,13 @@ impl CameraConfig {
             hfov_deg,
             yaw_deg,
             pitch_deg,
-        } = self.projection
+            roll_deg,
+        } = self.aimed()
         else {
             return None;
         };
         let (yaw, pitch) = (yaw_deg.to_radians(), pitch_deg.to_radians());
-        let fwd = crate::equirect::direction64(pitch, yaw);
-        let right = glam::DVec3::new(-yaw.sin(), 0.0, yaw.cos());
-        let up = right.cross(fwd);
+        let [fwd, right, up] = pinhole_basis64(yaw, pitch, roll_deg.to_radians());
         let tx = (0.5 * hfov_deg.to_radians()).tan();
         // The image's height over width, a pixel rounding's worth taller.
         let ty = tx * (1.0 / self.aspect + 1.0 / self.width as f64);
@@ -144,6 +193,7 @@ mod tests {
                 hfov_deg,
                 yaw_deg,
                 pitch_deg,
+                roll_deg: 0.0,
             },
             ..CameraConfig::default()
         }
@@ -171,5 +221,43 @@ mod tests {
         assert_eq!(pinhole(60.0, 0.0, -75.0).sea_azimuths_deg(), None);
         assert!(pinhole(60.0, 0.0, -60.0).sea_azimuths_deg().is_some());
         assert_eq!(CameraConfig::default().sea_azimuths_deg(), None);
+    }
+
+    /// `look_at_m` aims the pinhole from the camera's own place: a point 100 m along +z and
+    /// 10 m below the camera gives yaw 90 and pitch -atan(0.1); without it the projection is
+    /// as given; and a look-at beside an explicit yaw, on a panorama, or at the camera itself
+    /// is refused, naming the key.
+    #[test]
+    fn look_at_sets_the_yaw_and_pitch() {
+        let mut c = pinhole(40.0, 0.0, 0.0);
+        c.position_m = [5.0, -3.0];
+        c.height_m = 12.0;
+        c.look_at_m = Some([5.0, 2.0, 97.0]);
+        let Projection::Pinhole {
+            yaw_deg, pitch_deg, ..
+        } = c.aimed()
+        else {
+            panic!("a pinhole stays one");
+        };
+        assert!((yaw_deg - 90.0).abs() < 1e-9, "{yaw_deg}");
+        assert!(
+            (pitch_deg + 0.1f64.atan().to_degrees()).abs() < 1e-9,
+            "{pitch_deg}"
+        );
+        c.validate().unwrap();
+        assert_eq!(
+            pinhole(40.0, 7.0, -3.0).aimed(),
+            pinhole(40.0, 7.0, -3.0).projection
+        );
+        let refused = |c: CameraConfig| c.validate().unwrap_err().to_string();
+        let mut both = c.clone();
+        both.projection = pinhole(40.0, 7.0, 0.0).projection;
+        assert!(refused(both).starts_with("camera.look_at_m"));
+        let mut pano = c.clone();
+        pano.projection = Projection::Equirect { band_deg: None };
+        assert!(refused(pano).starts_with("camera.look_at_m"));
+        let mut itself = c.clone();
+        itself.look_at_m = Some([5.0, 12.0, -3.0]);
+        assert!(refused(itself).starts_with("camera.look_at_m"));
     }
 }

@@ -374,6 +374,7 @@ impl CameraConfig {
                 hfov_deg,
                 yaw_deg,
                 pitch_deg,
+                roll_deg,
             } => {
                 if !(hfov_deg > 0.0 && hfov_deg < 179.0) {
                     return Err(invalid(
@@ -382,15 +383,47 @@ impl CameraConfig {
                         hfov_deg,
                     ));
                 }
-                if !yaw_deg.is_finite() || !(-90.0..=90.0).contains(&pitch_deg) {
+                if !yaw_deg.is_finite()
+                    || !(-90.0..=90.0).contains(&pitch_deg)
+                    || !(-180.0..=180.0).contains(&roll_deg)
+                {
                     return Err(invalid(
                         "camera.projection",
-                        "finite yaw and pitch in [-90, 90]",
-                        format!("yaw {yaw_deg}, pitch {pitch_deg}"),
+                        "finite yaw, pitch in [-90, 90] and roll in [-180, 180]",
+                        format!("yaw {yaw_deg}, pitch {pitch_deg}, roll {roll_deg}"),
                     ));
+                }
+                if let Some(p) = self.look_at_m {
+                    let d = [
+                        p[0] - self.position_m[0],
+                        p[1] - self.height_m,
+                        p[2] - self.position_m[1],
+                    ];
+                    if !p.iter().all(|c| c.is_finite()) || d.iter().all(|c| c.abs() < 1e-6) {
+                        return Err(invalid(
+                            "camera.look_at_m",
+                            "a finite point other than the camera's",
+                            format!("{p:?}"),
+                        ));
+                    }
+                    if yaw_deg != 0.0 || pitch_deg != 0.0 {
+                        return Err(invalid(
+                            "camera.look_at_m",
+                            "left out beside the pinhole's yaw_deg and pitch_deg, which it sets \
+                             (keep one)",
+                            format!("{p:?}"),
+                        ));
+                    }
                 }
             }
             Projection::Equirect { band_deg: None } => {}
+        }
+        if let (Projection::Equirect { .. }, Some(p)) = (self.projection, self.look_at_m) {
+            return Err(invalid(
+                "camera.look_at_m",
+                "given only for a pinhole camera (the panorama looks everywhere)",
+                format!("{p:?}"),
+            ));
         }
         Ok(())
     }

@@ -108,6 +108,7 @@ impl Camera {
                 hfov_deg,
                 yaw_deg,
                 pitch_deg,
+                roll_deg,
             } => {
                 let tan_half = (hfov_deg.to_radians() as f32 * 0.5).tan();
                 let sx = (2.0 * x / self.width as f32 - 1.0) * tan_half;
@@ -115,8 +116,13 @@ impl Camera {
                     / self.width as f32;
                 let (yaw, pitch) = (yaw_deg.to_radians() as f32, pitch_deg.to_radians() as f32);
                 let fwd = equirect::direction(pitch, yaw);
-                let right = Vec3::new(-yaw.sin(), 0.0, yaw.cos());
-                let up = right.cross(fwd);
+                let mut right = Vec3::new(-yaw.sin(), 0.0, yaw.cos());
+                let mut up = right.cross(fwd);
+                if roll_deg != 0.0 {
+                    // right side down for a positive roll (config::camera::pinhole_basis64)
+                    let (s, c) = (roll_deg.to_radians() as f32).sin_cos();
+                    (right, up) = (c * right - s * up, s * right + c * up);
+                }
                 (fwd + sx * right + sy * up).normalize()
             }
         }
@@ -143,7 +149,7 @@ impl Camera {
         let rows = (0..self.width)
             .map(|x| {
                 let el = |y: f32| self.direction(x as f32 + 0.5, y).y;
-                // the elevation falls down a column (an unrolled pinhole): bisect its crossing
+                // the elevation falls down a column (rolled under 90 degrees): bisect its crossing
                 let (mut lo, mut hi) = (0.0f32, h);
                 if !(el(lo) >= target && el(hi) <= target) {
                     return None;
@@ -224,6 +230,7 @@ mod tests {
                     hfov_deg: 40.0,
                     yaw_deg: 10.0,
                     pitch_deg,
+                    roll_deg: 0.0,
                 },
                 w,
                 2.0,
@@ -250,6 +257,39 @@ mod tests {
         );
         let pano = Camera::new(Projection::Equirect { band_deg: None }, 64, 2.0);
         assert!(pano.horizon_rows(h_m, r).is_none());
+    }
+
+    /// A pinhole rolled 90 degrees (right side down) sees at the top of its square image what
+    /// the upright one sees at its right edge, and at its right edge what the upright one
+    /// sees at its bottom.
+    #[test]
+    fn a_rolled_pinhole_turns_its_image_about_the_view() {
+        let cam = |roll_deg| {
+            Camera::new(
+                Projection::Pinhole {
+                    hfov_deg: 50.0,
+                    yaw_deg: 25.0,
+                    pitch_deg: -10.0,
+                    roll_deg,
+                },
+                64,
+                1.0,
+            )
+        };
+        let (upright, rolled) = (cam(0.0), cam(90.0));
+        let close = |a: Vec3, b: Vec3| (a - b).length() < 1e-5;
+        assert!(close(
+            rolled.direction(32.0, 0.0),
+            upright.direction(64.0, 32.0)
+        ));
+        assert!(close(
+            rolled.direction(64.0, 32.0),
+            upright.direction(32.0, 64.0)
+        ));
+        assert!(close(
+            rolled.direction(32.0, 32.0),
+            upright.direction(32.0, 32.0)
+        ));
     }
 
     #[test]
@@ -287,6 +327,7 @@ mod tests {
                     hfov_deg: 60.0,
                     yaw_deg: 30.0,
                     pitch_deg: -5.0,
+                    roll_deg: 0.0,
                 },
                 300,
             ),
@@ -338,6 +379,7 @@ mod tests {
                 hfov_deg: 60.0,
                 yaw_deg: 90.0,
                 pitch_deg: -10.0,
+                roll_deg: 0.0,
             },
             200,
             2.0,

@@ -85,7 +85,7 @@ pub(super) fn check_memory(
     batches: usize,
     keep_states: bool,
 ) -> Result<(), RenderError> {
-    let camera = Camera::new(cfg.camera.projection, cfg.camera.width, cfg.camera.aspect);
+    let camera = Camera::new(cfg.camera.aimed(), cfg.camera.width, cfg.camera.aspect);
     let pixels = (camera.width * camera.height) as u64;
     let film = super::film::film_bytes(pixels, batches, keep_states);
     let mesh = triangles as u64 * BYTES_PER_TRIANGLE;

@@ -443,7 +443,7 @@ impl Prepared {
         progress: bool,
     ) -> Result<(Rendered, Vec<PixelState>), RenderError> {
         cfg.validate()?;
-        let camera = Camera::new(cfg.camera.projection, cfg.camera.width, cfg.camera.aspect);
+        let camera = Camera::new(cfg.camera.aimed(), cfg.camera.width, cfg.camera.aspect);
         let sampler = self.ocean.sampler(self.camera_position_m);
         let filtered = cfg.render.normals == crate::config::NormalMode::Filtered;
         // the `mapped` lobe draws the normals the lookup would read, the `smith` lobe the sea's

@@ -34,6 +34,7 @@ fn pinhole(pitch_deg: f64) -> Projection {
         hfov_deg: 90.0,
         yaw_deg: 30.0,
         pitch_deg,
+        roll_deg: 0.0,
     }
 }
 

@@ -108,7 +108,7 @@ pub(super) fn render_reference(
     let t = Instant::now();
     let mut c = cfg.clone();
     c.render.spp = spp;
-    let camera = Camera::new(c.camera.projection, c.camera.width, c.camera.aspect);
+    let camera = Camera::new(c.camera.aimed(), c.camera.width, c.camera.aspect);
     let boost = if max_boost > 1 {
         let mut pc = c.clone();
         pc.render.spp = sampling::pilot_spp(spp);
