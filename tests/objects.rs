@@ -140,7 +140,8 @@ fn a_floating_ship_sits_at_its_draft_on_a_calm_sea_and_on_the_waves_on_a_rough_o
 /// a E / pi, E the sky's downwelling irradiance. Under a uniform sky of 1 every sample is
 /// exactly a; under the clear sky with its sun (sampled by next-event estimation and weighed
 /// against the bounce by multiple importance) the mean agrees with a E / pi within its noise
-/// and the irradiance's own quadrature.
+/// and the irradiance's own quadrature. A GGX metal deck under the uniform sky reflects its
+/// directional albedo (masking loses a little of F0).
 #[test]
 fn a_deck_under_the_open_sky_reflects_its_irradiance() {
     let albedo = 0.6;
@@ -173,6 +174,38 @@ fn a_deck_under_the_open_sky_reflects_its_irradiance() {
             assert!((c - albedo as f32).abs() < 1e-5, "{px:?}");
         }
     }
+
+    // a metal deck under the uniform sky reflects its directional albedo, E[F G2 / G1] over
+    // GGX's visible normals seen from straight above (the camera's rays are within 3 degrees)
+    let mut metal = cfg.clone();
+    metal.objects[0].material = vastocean::config::Material::Metal;
+    metal.objects[0].roughness = 0.5;
+    let p = prepare(&metal).unwrap();
+    let r = p.render(&metal, false).unwrap();
+    let g = vastocean::render::ggx::Ggx {
+        alpha: 0.5,
+        f0: Vec3::splat(albedo as f32),
+    };
+    let mut rng = Rng::keyed(&[35, 2]);
+    let n = 400_000;
+    let expected: f64 = (0..n)
+        .filter_map(|_| g.sample(Vec3::Z, rng.f32(), rng.f32()))
+        .map(|(_, w)| w.x as f64)
+        .sum::<f64>()
+        / n as f64;
+    let lum = |c: [f32; 3]| vastocean::color::luminance(c) as f64;
+    let count = r.film.image.pixels.len() as f64;
+    let mean = r.film.image.pixels.iter().map(|&c| lum(c)).sum::<f64>() / count;
+    let se = (r.film.var_y.iter().map(|&v| v as f64).sum::<f64>()).sqrt() / count;
+    assert!(
+        (mean - expected).abs() < 4.0 * se + 0.002,
+        "metal deck {mean:.5} +- {se:.5}, directional albedo {expected:.5}"
+    );
+    // GGX loses a fifth of its visible normals past 45 degrees at alpha 0.5 (tan^2 CDF)
+    assert!(
+        expected < 0.8 * albedo && expected > 0.6 * albedo,
+        "{expected}"
+    );
 
     let mut sunny = cfg.clone();
     sunny.sky = vastocean::config::SkyConfig::default();

@@ -21,7 +21,7 @@ use thiserror::Error;
 
 pub use camera::{CameraConfig, Projection};
 pub use lod::{LodChoice, LodConfig, Pattern, Reading};
-pub use objects::{ObjectConfig, ShipConfig};
+pub use objects::{Material, ObjectConfig, ShipConfig};
 pub use ocean::OceanParams;
 pub use render::{
     Aov, Backend, FilterLobe, NormalMode, RenderConfig, SurfaceKind, Water, WrongSide,

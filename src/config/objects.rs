@@ -34,8 +34,13 @@ pub struct ObjectConfig {
     /// Float on the sea: heave, pitch and roll from a least-squares plane through the surface
     /// under the hull at the render's time (docs/objects.md). `height_m` is then ignored.
     pub float: bool,
-    /// Diffuse (Lambertian) reflectance, linear RGB in [0, 1] (1: white, as a furnace test wants).
+    /// What the surface is: Lambertian (`diffuse`) or a GGX conductor (`metal`).
+    pub material: Material,
+    /// Linear RGB in [0, 1]: the diffuse reflectance, or a metal's reflectance at normal
+    /// incidence (1: white, as a furnace test wants).
     pub albedo: [f64; 3],
+    /// A metal's GGX roughness alpha (0.001 mirror-like to 1 very rough).
+    pub roughness: f64,
     /// The built-in ship's dimensions (`mesh = "ship"` only).
     pub ship: ShipConfig,
 }
@@ -50,11 +55,27 @@ impl Default for ObjectConfig {
             scale: 1.0,
             height_m: 0.0,
             float: true,
+            material: Material::Diffuse,
             albedo: [0.5, 0.5, 0.5],
+            roughness: 0.3,
             ship: ShipConfig::default(),
         }
     }
 }
+
+/// An object's surface.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Material {
+    /// Lambertian: light reflected alike into every direction.
+    #[default]
+    Diffuse,
+    /// A rough conductor: GGX microfacets, Smith masking, Schlick's Fresnel (paint with a sheen,
+    /// steel, aluminium).
+    Metal,
+}
+
+super::choice!(Material { Diffuse => "diffuse", Metal => "metal" });
 
 /// The built-in ship: a Wigley hull y = B/2 (1 - (2x/L)^2)(1 - (z/T)^2) (the standard test hull
 /// of naval hydrodynamics) with vertical sides up to the deck and a deckhouse aft.
@@ -149,6 +170,13 @@ impl ObjectConfig {
                     format!("{albedo:?}"),
                 ));
             }
+        }
+        if !(self.roughness >= 0.001 && self.roughness <= 1.0) {
+            return Err(invalid(
+                &field("roughness"),
+                "in [0.001, 1]",
+                self.roughness,
+            ));
         }
         let s = &self.ship;
         for (f, v) in [

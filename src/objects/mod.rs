@@ -84,6 +84,9 @@ impl LocalMesh {
 #[derive(Clone, Debug, PartialEq)]
 pub struct PlacedObject {
     pub name: String,
+    pub material: crate::config::Material,
+    /// A metal's GGX roughness alpha.
+    pub roughness: f32,
     /// The sea's plane under it (floating objects; `None` for fixed ones).
     pub plane: Option<Plane>,
     /// Its mesh's origin in the scene (camera-relative x, z; y above mean sea level), m.
@@ -172,6 +175,8 @@ impl SceneObjects {
             }
             placed.push(PlacedObject {
                 name: cfg.display_name(k),
+                material: cfg.material,
+                roughness: cfg.roughness as f32,
                 plane,
                 origin: curved_frame_position(rel[0], rel[1], [0.0, lift, 0.0], earth_radius_m),
                 first_triangle,

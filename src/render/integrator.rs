@@ -462,7 +462,9 @@ impl SceneRef<'_> {
             let mut b = 0;
             // an object's bounce rides with the first branches
             for (jo, (k, o)) in objects.iter().enumerate().filter(|_| pass == 0) {
-                let (w, sun_pdf) = o.bounce;
+                let Some((w, sun_pdf)) = o.bounce else {
+                    continue;
+                };
                 batch[b] = PathVertex {
                     ray: o.sp.spawn(w),
                     sample: entries[*k as usize].sample,

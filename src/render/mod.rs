@@ -9,6 +9,7 @@ pub mod counters;
 pub mod earth_tilt;
 pub mod film;
 pub mod footprint;
+pub mod ggx;
 pub mod integrator;
 mod interface;
 mod limits;

@@ -1,8 +1,8 @@
 //! Objects in the path tracer ([`crate::objects`]): their hits beside the ocean's, their
-//! shading (Lambertian: the sun sampled by next-event estimation and weighed by the power
-//! heuristic against a cosine-weighted bounce, which carries its density so that the sun it
-//! finds itself gets the complementary weight), and shadow rays that both the sea and the
-//! objects block.
+//! shading (Lambertian, or a GGX conductor, [`super::ggx`]: the sun sampled by next-event
+//! estimation and weighed by the power heuristic against the BSDF's own bounce, which carries
+//! its density so that the sun it finds itself gets the complementary weight), and shadow rays
+//! that both the sea and the objects block.
 //!
 //! Every ray the integrator would answer without the ocean's BVH (the skip shortcuts: a ray
 //! that cannot meet the sea) is still tested against the objects first, so a ship above the
@@ -12,11 +12,14 @@
 use glam::Vec3;
 
 use super::counters::Counters;
+use super::ggx::{Ggx, from_local, to_local};
 use super::integrator::{CAMERA_BATCH, SceneRef, TraceSettings};
 use super::interface::{SurfacePoint, surface_point};
 use super::microfacet::power_heuristic;
 use crate::accel::{Hit, Ray};
+use crate::config::Material;
 use crate::rng::Rng;
+use std::f32::consts::FRAC_1_PI;
 
 /// What an object hit does to a path.
 #[derive(Clone, Copy)]
@@ -29,8 +32,9 @@ pub(super) struct ObjectScatter {
     pub(super) attenuation: Vec3,
     pub(super) in_water: bool,
     pub(super) width_m: f32,
-    /// The bounce's direction and the density the sun it finds is weighed with (0: full).
-    pub(super) bounce: (Vec3, f32),
+    /// The bounce's direction and the density the sun it finds is weighed with (0: full);
+    /// `None` where a metal's sample left below the surface.
+    pub(super) bounce: Option<(Vec3, f32)>,
     /// The sun's sampled direct light: the shadow ray and the radiance it brings if clear.
     pub(super) sun: Option<(Ray, Vec3)>,
 }
@@ -47,7 +51,7 @@ impl ObjectScatter {
         attenuation: Vec3::ZERO,
         in_water: false,
         width_m: 0.0,
-        bounce: (Vec3::Y, 0.0),
+        bounce: None,
         sun: None,
     };
 }
@@ -87,9 +91,9 @@ impl SceneRef<'_> {
         }
     }
 
-    /// Shading at an object hit of `ray` (travelling in the water when `in_water`): the
-    /// Lambertian bounce, drawn cosine-weighted from `rng`, and in the air the sun sampled
-    /// (two more numbers, drawn first).
+    /// Shading at an object hit of `ray` (travelling in the water when `in_water`): in the air
+    /// the sun sampled (two numbers, drawn first), then the bounce (two more): cosine-weighted
+    /// for a diffuse object, by GGX's visible normals for a metal one.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn scatter_object(
         &self,
@@ -108,6 +112,25 @@ impl SceneRef<'_> {
         // the side the ray came from (both sides of an object's triangle are its surface)
         let n = if d.dot(sp.ng) > 0.0 { -sp.ng } else { sp.ng };
         let albedo = objects.albedo_of[hit.prim as usize];
+        let object = objects.object(hit.prim);
+        let metal = (object.material == Material::Metal).then_some(Ggx {
+            alpha: object.roughness,
+            f0: albedo,
+        });
+        let wo = to_local(n, -d);
+        // the BSDF times the cosine, and the density the bounce gives direction w
+        let reflect = |w: Vec3| -> (Vec3, f32) {
+            match &metal {
+                None => {
+                    let cos = n.dot(w).max(0.0);
+                    (albedo * cos * FRAC_1_PI, cos * FRAC_1_PI)
+                }
+                Some(g) => {
+                    let wi = to_local(n, w);
+                    (g.f(wo, wi) * wi.z.max(0.0), g.pdf(wo, wi))
+                }
+            }
+        };
         let attenuation = if in_water {
             settings.water.transmittance(hit.t)
         } else {
@@ -117,27 +140,32 @@ impl SceneRef<'_> {
         let sun_sampled = !in_water && self.sun.is_some();
         if let (Some(light), false) = (&self.sun, in_water) {
             let s = light.sample(sp.p, rng.f32(), rng.f32());
-            let cos = n.dot(s.d);
-            if cos > 0.0 && s.pdf > 0.0 {
-                let radiance = light.radiance(&s);
-                let w = power_heuristic(s.pdf, cos * std::f32::consts::FRAC_1_PI);
-                let l = albedo * std::f32::consts::FRAC_1_PI * radiance * (cos * w / s.pdf);
-                sun = Some((sp.spawn(s.d), l));
+            if n.dot(s.d) > 0.0 && s.pdf > 0.0 {
+                let (f_cos, bounce_pdf) = reflect(s.d);
+                let w = power_heuristic(s.pdf, bounce_pdf);
+                sun = Some((sp.spawn(s.d), f_cos * light.radiance(&s) * (w / s.pdf)));
             }
         }
-        let (w, cos) = cosine_direction(n, rng.f32(), rng.f32());
-        let bounce_pdf = if sun_sampled {
-            cos * std::f32::consts::FRAC_1_PI
-        } else {
-            0.0
+        let (u1, u2) = (rng.f32(), rng.f32());
+        let (bounce, weight) = match &metal {
+            None => {
+                let (w, cos) = cosine_direction(n, u1, u2);
+                (Some((w, cos * FRAC_1_PI)), albedo)
+            }
+            Some(g) => match g.sample(wo, u1, u2) {
+                Some((wi, weight)) => (Some((from_local(n, wi), g.pdf(wo, wi))), weight),
+                // it leaves below the surface: masked, its light lost
+                None => (None, Vec3::ZERO),
+            },
         };
         ObjectScatter {
             sp,
-            weight: attenuation * albedo,
+            weight: attenuation * weight,
             attenuation,
             in_water,
             width_m,
-            bounce: (w, bounce_pdf),
+            // the sun the bounce finds is weighed against the sun's own samples
+            bounce: bounce.map(|(w, pdf)| (w, if sun_sampled { pdf } else { 0.0 })),
             sun,
         }
     }

@@ -338,13 +338,13 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
         },
         Extra::Furnace,
     );
-    // A white Lambertian ship floating in view, and a white box held over the camera's
-    // nadir filling the lower sky: light between the sea and the objects may bounce many
-    // times, and still no pixel may exceed the sky's 1.
+    // A white Lambertian ship floating in view, and a white metal one held just above the
+    // sea beside the camera: light between the sea and the objects may bounce many times,
+    // and still no pixel may exceed the sky's 1.
     add(
         "furnace-objects",
         "white furnace",
-        "uniform sky 1, white ship and box".into(),
+        "uniform sky 1, white diffuse and metal ships".into(),
         &|s| {
             furnace(s);
             let white = [1.0; 3];
@@ -362,6 +362,7 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
                     position_m: [0.0, -12.0],
                     height_m: 3.0,
                     float: false,
+                    material: crate::config::Material::Metal,
                     albedo: white,
                     ..Default::default()
                 },
