@@ -108,10 +108,6 @@ impl LocalMesh {
 mod tests {
     use super::*;
 
-    /// The hull's volume below the waterline: the Wigley hull's displacement has the closed
-    /// form (4/9) L B T (the integral of (1 - xi^2)(1 - zeta^2) over the unit square, times
-    /// L B T); the mesh's, by the divergence theorem over its closed surface cut at y = 0, is
-    /// within the discretisation's 1 %. Winding outward makes the signed volume positive.
     /// The signed volume enclosed by `triangles` of `m` (divergence theorem).
     fn volume(m: &LocalMesh, triangles: &[[u32; 3]]) -> f64 {
         triangles
@@ -128,6 +124,11 @@ mod tests {
             .sum()
     }
 
+    /// The hull's volume: below the waterline the Wigley hull displaces the closed form
+    /// (4/9) L B T (the integral of (1 - xi^2)(1 - zeta^2) over the unit square, times L B T),
+    /// above it the vertical sides hold (2/3) L B F; the mesh's, by the divergence theorem over
+    /// its closed surface, is within the discretisation's 1 %. Winding outward makes the
+    /// signed volume positive.
     #[test]
     fn the_wigley_hull_displaces_four_ninths_of_its_box() {
         let s = ShipConfig {

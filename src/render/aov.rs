@@ -1,8 +1,9 @@
 //! Layers for training data (`render.aovs`): what each pixel's centre ray meets first, as
 //! further channels of the render's EXR. Depth `Z` (the distance to the hit, m; +inf for the
-//! sky), the shading normal `N.X N.Y N.Z` there (the normal mode's for the water, air side
-//! up; the triangle's for an object, facing the camera; in the scene's frame, y up at the
-//! camera; zero for the sky) and `id` (-1 the sky, 0 the water, k the k-th object of the scene file).
+//! sky), the shading normal `N.X N.Y N.Z` there (for the water the normal mode's at a zero
+//! footprint, air side up, so the mapped normal for `filtered`; for an object its triangle's,
+//! facing the camera; in the scene's frame, y up at the camera; zero for the sky) and `id`
+//! (-1 the sky, 0 the water, k the k-th object of the scene file).
 //! One ray per pixel, through its centre, traced as the camera's own rays are: the layers are
 //! exact per pixel, not averages over its samples, so ids never blend at an object's edge.
 //! Each object's 2-D bounding box comes from the id layer.

@@ -148,15 +148,19 @@ impl Camera {
         let h = self.height as f32;
         let rows = (0..self.width)
             .map(|x| {
-                let el = |y: f32| self.direction(x as f32 + 0.5, y).y;
-                // the elevation falls down a column (rolled under 90 degrees): bisect its crossing
-                let (mut lo, mut hi) = (0.0f32, h);
-                if !(el(lo) >= target && el(hi) <= target) {
+                // above the horizon where positive. The horizon is a cone of half-angle near
+                // 90 degrees, a near-straight line across the image that a column crosses once
+                // at most: bisect the crossing (from the top down, or the bottom up when
+                // the camera is rolled over)
+                let above = |y: f32| self.direction(x as f32 + 0.5, y).y - target;
+                let top_above = above(0.0) >= 0.0;
+                if top_above == (above(h) >= 0.0) {
                     return None;
                 }
+                let (mut lo, mut hi) = (0.0f32, h);
                 for _ in 0..40 {
                     let mid = 0.5 * (lo + hi);
-                    if el(mid) > target {
+                    if (above(mid) >= 0.0) == top_above {
                         lo = mid;
                     } else {
                         hi = mid;
@@ -248,6 +252,22 @@ mod tests {
             "{mid} vs {expect}"
         );
         assert!(rows.iter().all(|r| r.is_some()));
+        // rolled upside down, the image turns half round about its centre
+        let over = Camera::new(
+            Projection::Pinhole {
+                hfov_deg: 40.0,
+                yaw_deg: 10.0,
+                pitch_deg: 0.0,
+                roll_deg: 180.0,
+            },
+            w,
+            2.0,
+        );
+        let turned = over.horizon_rows(h_m, r).unwrap();
+        for x in 0..w {
+            let (a, b) = (turned[x].unwrap(), rows[w - 1 - x].unwrap());
+            assert!((a - (c.height as f32 - b)).abs() < 0.01, "{x}: {a} {b}");
+        }
         assert!(
             cam(30.0)
                 .horizon_rows(h_m, r)

@@ -69,8 +69,8 @@ pub struct Counters {
     pub normal_timed_twice_points: u64,
     /// Filtered normals: hits shaded with a rough lobe (the rest resolve every wave), the
     /// sun sampled at those hits (`sun_samples`), the shadow rays traced for them
-    /// (`sun_rays`; the rest rose clear of the mesh) and those the sea or an object blocked.
-    /// Absent from pass files written before them.
+    /// (`sun_rays`; the rest rose clear of the mesh) and those the sea blocked. Absent from
+    /// pass files written before them.
     #[serde(default)]
     pub rough_hits: u64,
     #[serde(default)]
@@ -79,12 +79,16 @@ pub struct Counters {
     pub sun_rays: u64,
     #[serde(default)]
     pub sun_occluded: u64,
-    /// Objects: rays traced against their structure (those crossing their bounds) and object
-    /// hits shaded. Absent from pass files written before them.
+    /// Objects: rays traced against their structure (those crossing their bounds; the rays
+    /// they take from the sea still count in the sea's counts, `rays` or a `skipped_*`),
+    /// object hits shaded (each samples the sun in the air), and the sun's shadow rays (the
+    /// sea's or theirs) that an object blocked. Absent from pass files written before them.
     #[serde(default)]
     pub object_rays: u64,
     #[serde(default)]
     pub object_hits: u64,
+    #[serde(default)]
+    pub sun_object_occluded: u64,
 }
 
 impl std::ops::AddAssign for Counters {
@@ -118,6 +122,7 @@ impl std::ops::AddAssign for Counters {
         self.sun_occluded += o.sun_occluded;
         self.object_rays += o.object_rays;
         self.object_hits += o.object_hits;
+        self.sun_object_occluded += o.sun_object_occluded;
     }
 }
 

@@ -189,8 +189,12 @@ impl SceneRef<'_> {
                 direct[j] = light;
                 (all[j], none[j]) = (ray, false);
                 let d = Vec3::from(ray.dir);
+                // (an object's deck stands above the sea's highest vertex: a sun just below
+                // the horizon must still be looked for through the sea)
                 let clear = ray.is_finite()
-                    && (self.skip_above_y.is_some_and(|top| ray.org[1] > top)
+                    && (self
+                        .skip_above_y
+                        .is_some_and(|top| ray.org[1] > top && d.y >= 0.0)
                         || self
                             .skip_slope
                             .is_some_and(|k| d.y > k * (d.x * d.x + d.z * d.z).sqrt()));
@@ -219,7 +223,7 @@ impl SceneRef<'_> {
             self.object_hits(&all[..m], &none[..m], &mut hits[..m], c);
             for (j, h) in hits[..m].iter().enumerate() {
                 if h.is_some() {
-                    c.sun_occluded += 1;
+                    c.sun_object_occluded += 1;
                     direct[j] = Vec3::ZERO;
                 }
             }

@@ -491,7 +491,8 @@ impl Prepared {
         let (h, aovs) = (cfg.camera.height_m as f32, &cfg.render.aovs);
         let aovs = (self.pool).install(|| scene_ref.aov_layers(&camera, h, aovs, &settings));
         let seconds_trace = t.elapsed().as_secs_f64();
-        if let Some(message) = self.accel.take_error() {
+        let objects_error = (self.objects.as_ref()).and_then(|o| o.accel.take_error());
+        if let Some(message) = self.accel.take_error().or(objects_error) {
             return Err(RenderError::Trace {
                 backend: self.accel.name(),
                 message,
