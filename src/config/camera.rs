@@ -3,6 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::{ConfigError, invalid, positive};
+
 /// Which camera and its parameters.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
@@ -180,6 +182,97 @@ impl CameraConfig {
             yaw_deg + (0.5 * (hi + lo)).to_degrees(),
             (0.5 * (hi - lo)).to_degrees(),
         ))
+    }
+}
+
+impl CameraConfig {
+    /// Checks every field; the first problem is returned with its name.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        positive("camera.height_m", self.height_m)?;
+        if !self.position_m.iter().all(|v| v.is_finite()) {
+            return Err(invalid(
+                "camera.position_m",
+                "finite",
+                format!("{:?}", self.position_m),
+            ));
+        }
+        if !(2..=65_536).contains(&self.width) {
+            return Err(invalid("camera.width", "in 2..=65536", self.width));
+        }
+        positive("camera.aspect", self.aspect)?;
+        match self.projection {
+            Projection::Equirect {
+                band_deg: Some((top, bottom)),
+            } => {
+                if !(top.is_finite()
+                    && bottom.is_finite()
+                    && (-90.0..=90.0).contains(&top)
+                    && (-90.0..=90.0).contains(&bottom)
+                    && top > bottom)
+                {
+                    return Err(invalid(
+                        "camera.projection.band_deg",
+                        "(top, bottom) with 90 >= top > bottom >= -90",
+                        format!("({top}, {bottom})"),
+                    ));
+                }
+            }
+            Projection::Pinhole {
+                hfov_deg,
+                yaw_deg,
+                pitch_deg,
+                roll_deg,
+            } => {
+                if !(hfov_deg > 0.0 && hfov_deg < 179.0) {
+                    return Err(invalid(
+                        "camera.projection.hfov_deg",
+                        "in (0, 179)",
+                        hfov_deg,
+                    ));
+                }
+                if !yaw_deg.is_finite()
+                    || !(-90.0..=90.0).contains(&pitch_deg)
+                    || !(-180.0..=180.0).contains(&roll_deg)
+                {
+                    return Err(invalid(
+                        "camera.projection",
+                        "finite yaw, pitch in [-90, 90] and roll in [-180, 180]",
+                        format!("yaw {yaw_deg}, pitch {pitch_deg}, roll {roll_deg}"),
+                    ));
+                }
+                if let Some(p) = self.look_at_m {
+                    let d = [
+                        p[0] - self.position_m[0],
+                        p[1] - self.height_m,
+                        p[2] - self.position_m[1],
+                    ];
+                    if !p.iter().all(|c| c.is_finite()) || d.iter().all(|c| c.abs() < 1e-6) {
+                        return Err(invalid(
+                            "camera.look_at_m",
+                            "a finite point other than the camera's",
+                            format!("{p:?}"),
+                        ));
+                    }
+                    if yaw_deg != 0.0 || pitch_deg != 0.0 {
+                        return Err(invalid(
+                            "camera.look_at_m",
+                            "left out beside the pinhole's yaw_deg and pitch_deg, which it sets \
+                             (keep one)",
+                            format!("{p:?}"),
+                        ));
+                    }
+                }
+            }
+            Projection::Equirect { band_deg: None } => {}
+        }
+        if let (Projection::Equirect { .. }, Some(p)) = (self.projection, self.look_at_m) {
+            return Err(invalid(
+                "camera.look_at_m",
+                "given only for a pinhole camera (the panorama looks everywhere)",
+                format!("{p:?}"),
+            ));
+        }
+        Ok(())
     }
 }
 
