@@ -98,15 +98,27 @@ impl Ggx {
     }
 }
 
-/// `w` in the frame of unit normal `n` (z along it) and back.
-pub fn to_local(n: Vec3, w: Vec3) -> Vec3 {
-    let (t, b) = n.any_orthonormal_pair();
-    Vec3::new(w.dot(t), w.dot(b), w.dot(n))
+/// An orthonormal frame whose z is a unit normal: directions into it and back.
+#[derive(Clone, Copy, Debug)]
+pub struct Frame {
+    t: Vec3,
+    b: Vec3,
+    n: Vec3,
 }
 
-pub fn from_local(n: Vec3, w: Vec3) -> Vec3 {
-    let (t, b) = n.any_orthonormal_pair();
-    w.x * t + w.y * b + w.z * n
+impl Frame {
+    pub fn new(n: Vec3) -> Frame {
+        let (t, b) = n.any_orthonormal_pair();
+        Frame { t, b, n }
+    }
+
+    pub fn to_local(&self, w: Vec3) -> Vec3 {
+        Vec3::new(w.dot(self.t), w.dot(self.b), w.dot(self.n))
+    }
+
+    pub fn from_local(&self, w: Vec3) -> Vec3 {
+        w.x * self.t + w.y * self.b + w.z * self.n
+    }
 }
 
 #[cfg(test)]

@@ -12,7 +12,7 @@
 use glam::Vec3;
 
 use super::counters::Counters;
-use super::ggx::{Ggx, from_local, to_local};
+use super::ggx::{Frame, Ggx};
 use super::integrator::{CAMERA_BATCH, SceneRef, TraceSettings};
 use super::interface::{SurfacePoint, surface_point};
 use super::microfacet::power_heuristic;
@@ -117,7 +117,8 @@ impl SceneRef<'_> {
             alpha: object.roughness,
             f0: albedo,
         });
-        let wo = to_local(n, -d);
+        let frame = Frame::new(n);
+        let wo = frame.to_local(-d);
         // the BSDF times the cosine, and the density the bounce gives direction w
         let reflect = |w: Vec3| -> (Vec3, f32) {
             match &metal {
@@ -126,7 +127,7 @@ impl SceneRef<'_> {
                     (albedo * cos * FRAC_1_PI, cos * FRAC_1_PI)
                 }
                 Some(g) => {
-                    let wi = to_local(n, w);
+                    let wi = frame.to_local(w);
                     (g.f(wo, wi) * wi.z.max(0.0), g.pdf(wo, wi))
                 }
             }
@@ -149,11 +150,11 @@ impl SceneRef<'_> {
         let (u1, u2) = (rng.f32(), rng.f32());
         let (bounce, weight) = match &metal {
             None => {
-                let (w, cos) = cosine_direction(n, u1, u2);
+                let (w, cos) = cosine_direction(&frame, u1, u2);
                 (Some((w, cos * FRAC_1_PI)), albedo)
             }
             Some(g) => match g.sample(wo, u1, u2) {
-                Some((wi, weight)) => (Some((from_local(n, wi), g.pdf(wo, wi))), weight),
+                Some((wi, weight)) => (Some((frame.from_local(wi), g.pdf(wo, wi))), weight),
                 // it leaves below the surface: masked, its light lost
                 None => (None, Vec3::ZERO),
             },
@@ -232,13 +233,14 @@ impl SceneRef<'_> {
     }
 }
 
-/// A direction about unit `n` with density cos / pi, from two uniform numbers, and its cosine.
-fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> (Vec3, f32) {
+/// A direction about `frame`'s normal with density cos / pi, from two uniform numbers, and its
+/// cosine.
+fn cosine_direction(frame: &Frame, u1: f32, u2: f32) -> (Vec3, f32) {
     let r = u1.sqrt();
     let (s, c) = (std::f32::consts::TAU * u2).sin_cos();
     let cos = (1.0 - u1).max(0.0).sqrt();
-    let (t, b) = n.any_orthonormal_pair();
-    ((r * c * t + r * s * b + cos * n).normalize(), cos)
+    let local = Vec3::new(r * c, r * s, cos);
+    (frame.from_local(local).normalize(), cos)
 }
 
 #[cfg(test)]
@@ -253,7 +255,7 @@ mod tests {
         let count = 200_000;
         let (mut sum_cos, mut side) = (0.0f64, Vec3::ZERO);
         for _ in 0..count {
-            let (w, cos) = cosine_direction(n, rng.f32(), rng.f32());
+            let (w, cos) = cosine_direction(&Frame::new(n), rng.f32(), rng.f32());
             assert!((w.dot(n) - cos).abs() < 1e-5 && cos >= 0.0);
             sum_cos += cos as f64;
             side += w - w.dot(n) * n;
