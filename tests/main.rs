@@ -14,6 +14,7 @@ mod far_field_glint;
 mod filtered;
 mod frames;
 mod lod;
+mod mount;
 mod objects;
 mod passes;
 mod render;

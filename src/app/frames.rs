@@ -101,6 +101,9 @@ pub struct FrameRecord {
     pub nan_count: u64,
     pub escaped_below_horizon: u64,
     pub warnings: Vec<String>,
+    /// Where a mounted camera (`camera.mount`) stood and looked at this frame.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub camera: Option<crate::config::CameraConfig>,
 }
 
 /// The sequence's JSON (`PREFIX.json`).
@@ -245,6 +248,10 @@ pub fn run(job: &FramesJob) -> Result<SequenceReport, AppError> {
         let index = i + 1;
         let update = if i == 0 {
             FrameUpdate::default()
+        } else if cfg.camera.mount.is_some() {
+            let update;
+            (prepared, update) = prepared.remount_to(&cfg, time_s)?;
+            update
         } else {
             prepared.advance_to(time_s, cfg.camera.height_m)?
         };
@@ -283,6 +290,7 @@ pub fn run(job: &FramesJob) -> Result<SequenceReport, AppError> {
             nan_count: r.report.nan_count,
             escaped_below_horizon: r.report.escaped_below_horizon,
             warnings: r.report.warnings,
+            camera: prepared.mounted.clone(),
         });
         report.ocean_notes = r.report.ocean_notes;
         summarize(&mut report);
@@ -345,7 +353,13 @@ impl fmt::Display for SequenceReport {
                 r.mean_luminance
             )?;
         }
-        if let (Some(u), Some(x)) = (self.median_seconds_update, self.rebuild_over_update) {
+        let mounted = self.frames.iter().any(|r| r.camera.is_some());
+        if let (true, Some(u)) = (mounted, self.median_seconds_update) {
+            writeln!(
+                f,
+                "  the camera rides an object: each frame tessellated and built anew around it, {u:.3} s per frame (median)"
+            )?;
+        } else if let (Some(u), Some(x)) = (self.median_seconds_update, self.rebuild_over_update) {
             writeln!(
                 f,
                 "  geometry update + refit {u:.3} s per frame (median): {x:.1}x faster than the first frame's tessellation + build"

@@ -49,6 +49,25 @@ pub struct CameraConfig {
     /// by its yaw and pitch.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub look_at_m: Option<[f64; 3]>,
+    /// A camera carried by an object (a bridge camera): it moves, pitches and rolls with it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mount: Option<Mount>,
+}
+
+/// Where an object carries the camera (`[camera.mount]`). The mount sets the camera's
+/// `position_m` and `height_m` from the object's pose at the render's time; a pinhole's yaw,
+/// pitch and roll are then taken in the object's frame (yaw 0 looks along its bow, roll 0 is
+/// its deck's level), unless `look_at_m` aims it at a world point (a stabilised camera). A
+/// panorama keeps the world's axes and only moves with the object.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Mount {
+    /// The `name` of the `[[object]]` that carries the camera (`object-N` for an unnamed one).
+    pub object: String,
+    /// The camera's place in the object's frame: forward along its bow, up from its design
+    /// waterline, to starboard; m (not scaled with the object's mesh).
+    #[serde(default)]
+    pub offset_m: [f64; 3],
 }
 
 impl Default for CameraConfig {
@@ -60,6 +79,7 @@ impl Default for CameraConfig {
             aspect: 16.0 / 9.0,
             projection: Projection::Equirect { band_deg: None },
             look_at_m: None,
+            mount: None,
         }
     }
 }
@@ -188,6 +208,27 @@ impl CameraConfig {
 impl CameraConfig {
     /// Checks every field; the first problem is returned with its name.
     pub fn validate(&self) -> Result<(), ConfigError> {
+        if let Some(m) = &self.mount {
+            if !m.offset_m.iter().all(|v| v.is_finite()) {
+                return Err(invalid(
+                    "camera.mount.offset_m",
+                    "finite",
+                    format!("{:?}", m.offset_m),
+                ));
+            }
+            let free = CameraConfig::default();
+            if self.position_m != free.position_m || self.height_m != free.height_m {
+                return Err(invalid(
+                    "camera.mount",
+                    "alone: the mount sets camera.position_m and camera.height_m (leave them \
+                     out)",
+                    format!(
+                        "position_m {:?}, height_m {}",
+                        self.position_m, self.height_m
+                    ),
+                ));
+            }
+        }
         positive("camera.height_m", self.height_m)?;
         if !self.position_m.iter().all(|v| v.is_finite()) {
             return Err(invalid(

@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-pub use camera::{CameraConfig, Projection};
+pub use camera::{CameraConfig, Mount, Projection};
 pub use lod::{LodChoice, LodConfig, Pattern, Reading};
 pub use objects::{Material, ObjectConfig, ShipConfig};
 pub use ocean::OceanParams;
@@ -273,6 +273,18 @@ impl SceneConfig {
         self.sky.validate()?;
         for (i, o) in self.objects.iter().enumerate() {
             o.validate(&format!("object[{i}]"))?;
+        }
+        if let Some(m) = &self.camera.mount {
+            let names: Vec<String> = (self.objects.iter().enumerate())
+                .map(|(k, o)| o.display_name(k))
+                .collect();
+            if !names.contains(&m.object) {
+                return Err(invalid(
+                    "camera.mount.object",
+                    &format!("the name of an [[object]] (this scene has {names:?})"),
+                    &m.object,
+                ));
+            }
         }
         let w = &self.water;
         if !(w.ior >= 1.0 && w.ior.is_finite()) {

@@ -6,6 +6,7 @@
 
 pub mod float;
 pub mod load;
+pub mod mount;
 pub mod ship;
 
 use std::path::PathBuf;
@@ -26,6 +27,8 @@ use float::Plane;
 pub enum ObjectError {
     #[error("object mesh {}: {message}", path.display())]
     Mesh { path: PathBuf, message: String },
+    #[error("camera.mount names {0:?}, and no [[object]] is called that")]
+    Mount(String),
     #[error("the objects' {backend} acceleration structure: {message}")]
     Accel {
         backend: &'static str,
@@ -77,6 +80,62 @@ impl LocalMesh {
         } else {
             load::read_mesh(&cfg.mesh)
         }
+    }
+}
+
+/// How an object lies at the render's time: on the sea's plane under it (floating) or level at
+/// its `height_m`, turned to its heading.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pose {
+    /// The sea's plane under it (floating objects; `None` for fixed ones).
+    pub plane: Option<Plane>,
+    /// Its axes (forward, up, starboard) in its unturned frame.
+    rotation: DMat3,
+    /// Its origin's height above mean sea level, m.
+    pub lift: f64,
+    sin_heading: f64,
+    cos_heading: f64,
+}
+
+impl Pose {
+    /// The pose of the object `cfg` with mesh `local` on the sea of `sampler`, its origin at
+    /// camera-relative `rel` (x, z), m.
+    pub fn of(cfg: &ObjectConfig, local: &LocalMesh, sampler: &Sampler, rel: [f64; 2]) -> Pose {
+        let (sin_heading, cos_heading) = cfg.heading_deg.to_radians().sin_cos();
+        let mut pose = Pose {
+            plane: None,
+            rotation: DMat3::IDENTITY,
+            lift: cfg.height_m,
+            sin_heading,
+            cos_heading,
+        };
+        if cfg.float {
+            let points = float::waterplane_points(local, cfg.scale);
+            let heights: Vec<f64> = points
+                .iter()
+                .map(|p| {
+                    let d = pose.turn(DVec3::new(p[0], 0.0, p[1]));
+                    surface_height_at(sampler, (rel[0] + d.x) as f32, (rel[1] + d.z) as f32)
+                })
+                .collect();
+            let plane = float::fit_plane(&points, &heights);
+            (pose.plane, pose.rotation, pose.lift) = (Some(plane), plane.rotation(), plane.heave);
+        }
+        pose
+    }
+
+    /// A direction of the object's frame (x forward, y up, z starboard) in the scene's local
+    /// tangent frame at the object.
+    pub fn turn(&self, v: DVec3) -> DVec3 {
+        let r = self.rotation * v;
+        let (s, c) = (self.sin_heading, self.cos_heading);
+        DVec3::new(r.x * c - r.z * s, r.y, r.x * s + r.z * c)
+    }
+
+    /// A point of the object's frame, m, as an offset from its origin's place on mean sea
+    /// level in the local tangent frame.
+    pub fn place(&self, p: DVec3) -> DVec3 {
+        self.turn(p) + DVec3::Y * self.lift
     }
 }
 
@@ -136,31 +195,12 @@ impl SceneObjects {
                 cfg.position_m[0] - camera_m[0],
                 cfg.position_m[1] - camera_m[1],
             ];
-            let heading = cfg.heading_deg.to_radians();
-            let (sin_h, cos_h) = heading.sin_cos();
-            // object frame (x forward, z starboard) -> the local tangent frame's (x, z)
-            let turn = |x: f64, z: f64| [x * cos_h - z * sin_h, x * sin_h + z * cos_h];
-            let (plane, rotation, lift) = if cfg.float {
-                let points = float::waterplane_points(&local, cfg.scale);
-                let heights: Vec<f64> = points
-                    .iter()
-                    .map(|p| {
-                        let d = turn(p[0], p[1]);
-                        surface_height_at(sampler, (rel[0] + d[0]) as f32, (rel[1] + d[1]) as f32)
-                    })
-                    .collect();
-                let plane = float::fit_plane(&points, &heights);
-                (Some(plane), plane.rotation(), plane.heave)
-            } else {
-                (None, DMat3::IDENTITY, cfg.height_m)
-            };
+            let pose = Pose::of(cfg, &local, sampler, rel);
             let base = positions.len() as u32;
             let first_triangle = indices.len() as u32;
             for p in &local.positions {
-                let v = rotation * (DVec3::from(*p) * cfg.scale);
-                let d = turn(v.x, v.z);
-                let w =
-                    curved_frame_position(rel[0], rel[1], [d[0], v.y + lift, d[1]], earth_radius_m);
+                let v = pose.place(DVec3::from(*p) * cfg.scale);
+                let w = curved_frame_position(rel[0], rel[1], v.to_array(), earth_radius_m);
                 positions.push(w.map(|c| c as f32));
             }
             indices.extend(local.triangles.iter().map(|t| t.map(|i| base + i)));
@@ -177,8 +217,13 @@ impl SceneObjects {
                 name: cfg.display_name(k),
                 material: cfg.material,
                 roughness: cfg.roughness as f32,
-                plane,
-                origin: curved_frame_position(rel[0], rel[1], [0.0, lift, 0.0], earth_radius_m),
+                plane: pose.plane,
+                origin: curved_frame_position(
+                    rel[0],
+                    rel[1],
+                    [0.0, pose.lift, 0.0],
+                    earth_radius_m,
+                ),
                 first_triangle,
                 triangle_count: local.triangles.len() as u32,
             });

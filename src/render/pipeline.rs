@@ -7,8 +7,6 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
-use serde::{Deserialize, Serialize};
-
 use super::film::{PixelState, Samples};
 use super::integrator::{highest_vertex_y, max_slope};
 use super::limits::check_memory;
@@ -76,6 +74,9 @@ pub struct Prepared {
     pub objects: Option<SceneObjects>,
     object_configs: Vec<crate::config::ObjectConfig>,
     backend: Backend,
+    /// The camera as its mount placed it (`camera.mount`), which renders use in place of the
+    /// scene's.
+    pub mounted: Option<crate::config::CameraConfig>,
 }
 
 /// How [`prepare_with`] builds a scene.
@@ -127,8 +128,28 @@ fn phase(progress: bool, message: String) -> indicatif::ProgressBar {
     bar
 }
 
-/// Builds the ocean, the tessellation and the BVH of a validated scene, as `setup` says.
+/// The ocean of `cfg` (on the calling thread pool) and the seconds it took.
+fn build_ocean(cfg: &SceneConfig, progress: bool) -> Result<(Arc<Surface>, f64), RenderError> {
+    let t = Instant::now();
+    let bar = phase(
+        progress,
+        format!("ocean: {} FFT layers", cfg.ocean.layers.len()),
+    );
+    let ocean = Surface::new(&cfg.ocean, cfg.render.ocean_seed)?;
+    // where the fold bound does not clear the sea, its sampled estimate is part of the build's
+    // time (it is kept, so the check after the build reads it)
+    ocean.folded_fraction();
+    bar.finish_and_clear();
+    Ok((Arc::new(ocean), t.elapsed().as_secs_f64()))
+}
+
+/// Builds the ocean, the tessellation and the BVH of a validated scene, as `setup` says. A
+/// camera an object carries (`camera.mount`) is placed once the ocean is built, and the scene
+/// is prepared around its place.
 pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderError> {
+    if cfg.camera.mount.is_some() {
+        return prepare_mounted(cfg, setup);
+    }
     let Setup {
         refittable,
         progress,
@@ -161,21 +182,9 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
     };
     let (ocean, seconds_ocean, mesh, stats, seconds_tessellation) =
         pool.install(|| -> Result<_, RenderError> {
-            let t = Instant::now();
             let (ocean, seconds_ocean) = match shared_ocean {
                 Some(ocean) => (ocean, 0.0),
-                None => {
-                    let bar = phase(
-                        progress,
-                        format!("ocean: {} FFT layers", cfg.ocean.layers.len()),
-                    );
-                    let ocean = Surface::new(&cfg.ocean, cfg.render.ocean_seed)?;
-                    // where the fold bound does not clear the sea, its sampled estimate is part
-                    // of the build's time (it is kept, so the check below reads it)
-                    ocean.folded_fraction();
-                    bar.finish_and_clear();
-                    (Arc::new(ocean), t.elapsed().as_secs_f64())
-                }
+                None => build_ocean(cfg, progress)?,
             };
             let folded = ocean.folded_fraction();
             if folded > MAX_FOLDED_FRACTION {
@@ -302,87 +311,46 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
         objects,
         object_configs: cfg.objects.clone(),
         backend: cfg.render.backend,
+        mounted: None,
     })
 }
 
-/// What moving a prepared scene to another ocean time cost, seconds.
-#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
-pub struct FrameUpdate {
-    /// The layers' fields at the new time (eq. 2 and the FFTs).
-    pub seconds_ocean: f64,
-    /// Every vertex's position and normal from its texture coordinate, and the mesh's
-    /// steepest slope (which the ray skipping needs).
-    pub seconds_geometry: f64,
-    /// The BVH's update over the moved vertices (Embree's refit, the Rust BVH's bounds).
-    pub seconds_refit: f64,
-}
-
-impl Prepared {
-    /// Moves the ocean to `time_s` and the mesh with it: the tessellation's topology stays
-    /// (it depends on the camera only), every vertex is displaced anew from its texture
-    /// coordinate and the BVH is refitted. Refuses, as [`prepare`] does, a sea that folds too
-    /// much or stands above the camera at that time.
-    pub fn advance_to(
-        &mut self,
-        time_s: f64,
-        camera_height_m: f64,
-    ) -> Result<FrameUpdate, RenderError> {
-        let t = Instant::now();
-        let ocean = Arc::get_mut(&mut self.ocean).ok_or(RenderError::SharedOcean(
-            "cannot move to another time: prepare the animation with an ocean of its own",
-        ))?;
-        let folded = self.pool.install(|| -> Result<f64, RenderError> {
-            ocean.set_time(time_s)?;
-            Ok(ocean.folded_fraction())
-        })?;
-        let seconds_ocean = t.elapsed().as_secs_f64();
-        if folded > MAX_FOLDED_FRACTION {
-            return Err(RenderError::Folded {
-                folded,
-                choppiness: self.ocean.params().choppiness,
-            });
-        }
-        let sampler = self.ocean.sampler(self.camera_position_m);
-        let surface_m = surface_height_at_nadir(&sampler);
-        if camera_height_m <= surface_m {
-            return Err(RenderError::CameraUnderwater {
-                camera_m: camera_height_m,
-                surface_m,
-            });
-        }
-        let t = Instant::now();
-        let earth_r = self.lod.earth_radius_m;
-        let (positions, normals) = self
-            .pool
-            .install(|| crate::lod::displace(self.accel.mesh().uvs(), &sampler, earth_r));
-        let accel = &mut self.accel;
-        let seconds_refit = self
-            .pool
-            .install(|| accel.update_vertices(&positions, &normals))
-            .map_err(|message| RenderError::Refit {
-                backend: self.accel.name(),
-                message,
-            })?;
-        drop((positions, normals));
-        let mesh = self.accel.mesh();
-        (self.skip_slope, self.skip_above_y) = self
-            .pool
-            .install(|| (max_slope(mesh), highest_vertex_y(mesh)));
-        if self.object_configs.iter().any(|o| o.float) {
-            let (r, cam, threads) = (earth_r, self.camera_position_m, self.threads);
-            let configs = &self.object_configs;
-            let backend = self.backend;
-            self.objects = self
-                .pool
-                .install(|| SceneObjects::build(configs, &sampler, cam, r, backend, threads))?;
-        }
-        let seconds_geometry = t.elapsed().as_secs_f64() - seconds_refit;
-        Ok(FrameUpdate {
-            seconds_ocean,
-            seconds_geometry,
-            seconds_refit,
-        })
+/// [`prepare_with`] for a scene whose camera an object carries: the ocean first, then the
+/// camera on the object's pose at the ocean's time, then the scene around it.
+fn prepare_mounted(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderError> {
+    cfg.validate()?;
+    let (ocean, seconds_ocean) = match setup.ocean {
+        Some(ocean) => (ocean, 0.0),
+        None => tracing_pool(cfg.render.threads)?.install(|| build_ocean(cfg, setup.progress))?,
+    };
+    let mut placed = cfg.clone();
+    placed.camera = crate::objects::mount::mounted_camera(&cfg.camera, &cfg.objects, &ocean)?;
+    let surface_m = surface_height_at_nadir(&ocean.sampler(placed.camera.position_m));
+    if placed.camera.height_m <= surface_m {
+        return Err(RenderError::CameraUnderwater {
+            camera_m: placed.camera.height_m,
+            surface_m,
+        });
     }
+    // a sky handed in was built for the free camera's height, which its dome's parallax uses
+    let sky = setup.sky.and_then(|mut sky| {
+        let h = placed.camera.height_m;
+        if let Some(own) = Arc::get_mut(&mut sky) {
+            own.camera_height_m = h;
+        }
+        (sky.camera_height_m == h).then_some(sky)
+    });
+    let mut prepared = prepare_with(
+        &placed,
+        Setup {
+            ocean: Some(ocean),
+            sky,
+            ..setup
+        },
+    )?;
+    prepared.seconds_ocean += seconds_ocean;
+    prepared.mounted = Some(placed.camera);
+    Ok(prepared)
 }
 
 /// Deepest trough counted on, in RMS heights: a Gaussian sea goes below -5 sigma at about one
@@ -443,6 +411,26 @@ impl Prepared {
         progress: bool,
     ) -> Result<(Rendered, Vec<PixelState>), RenderError> {
         cfg.validate()?;
+        let placed;
+        let cfg = match (&cfg.camera.mount, &self.mounted) {
+            (None, _) => cfg,
+            (Some(_), Some(camera)) => {
+                placed = SceneConfig {
+                    camera: crate::config::CameraConfig {
+                        width: cfg.camera.width,
+                        aspect: cfg.camera.aspect,
+                        ..camera.clone()
+                    },
+                    ..cfg.clone()
+                };
+                &placed
+            }
+            (Some(_), None) => {
+                return Err(RenderError::SharedOcean(
+                    "was prepared for a free camera; this scene's camera is mounted",
+                ));
+            }
+        };
         let camera = Camera::new(cfg.camera.aimed(), cfg.camera.width, cfg.camera.aspect);
         let sampler = self.ocean.sampler(self.camera_position_m);
         let filtered = cfg.render.normals == crate::config::NormalMode::Filtered;
@@ -590,6 +578,10 @@ pub fn render_scene(cfg: &SceneConfig, progress: bool) -> Result<Rendered, Rende
     )?
     .render(cfg, progress)
 }
+
+#[path = "pipeline_frames.rs"]
+mod frames;
+pub use frames::FrameUpdate;
 
 #[cfg(test)]
 #[path = "pipeline_tests.rs"]
