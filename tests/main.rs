@@ -13,6 +13,7 @@ mod exact;
 mod far_field_glint;
 mod filtered;
 mod frames;
+mod glass;
 mod lod;
 mod mount;
 mod objects;

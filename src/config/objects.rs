@@ -34,13 +34,17 @@ pub struct ObjectConfig {
     /// Float on the sea: heave, pitch and roll from a least-squares plane through the surface
     /// under the hull at the render's time (docs/objects.md). `height_m` is then ignored.
     pub float: bool,
-    /// What the surface is: Lambertian (`diffuse`) or a GGX conductor (`metal`).
+    /// What the surface is: Lambertian (`diffuse`), a GGX conductor (`metal`) or a rough GGX
+    /// dielectric that reflects and refracts (`glass`).
     pub material: Material,
-    /// Linear RGB in [0, 1]: the diffuse reflectance, or a metal's reflectance at normal
-    /// incidence (1: white, as a furnace test wants).
+    /// Linear RGB in [0, 1]: the diffuse reflectance, a metal's reflectance at normal
+    /// incidence, or the share of light glass lets through at each crossing of its surface (1:
+    /// white or clear, as a furnace test wants).
     pub albedo: [f64; 3],
-    /// A metal's GGX roughness alpha (0.001 mirror-like to 1 very rough).
+    /// A metal's or glass's GGX roughness alpha (0.001 mirror-like to 1 very rough).
     pub roughness: f64,
+    /// Glass's index of refraction (1.5 window glass, 1.31 ice).
+    pub ior: f64,
     /// The built-in ship's dimensions (`mesh = "ship"` only).
     pub ship: ShipConfig,
 }
@@ -58,6 +62,7 @@ impl Default for ObjectConfig {
             material: Material::Diffuse,
             albedo: [0.5, 0.5, 0.5],
             roughness: 0.3,
+            ior: 1.5,
             ship: ShipConfig::default(),
         }
     }
@@ -73,9 +78,12 @@ pub enum Material {
     /// A rough conductor: GGX microfacets, Smith masking, Schlick's Fresnel (paint with a sheen,
     /// steel, aluminium).
     Metal,
+    /// A rough dielectric: GGX microfacets that reflect and refract by the Fresnel equations
+    /// (glass, ice, clear plastic). Its mesh must be closed and wound outward.
+    Glass,
 }
 
-super::choice!(Material { Diffuse => "diffuse", Metal => "metal" });
+super::choice!(Material { Diffuse => "diffuse", Metal => "metal", Glass => "glass" });
 
 /// The built-in ship: a Wigley hull y = B/2 (1 - (2x/L)^2)(1 - (z/T)^2) (the standard test hull
 /// of naval hydrodynamics) with vertical sides up to the deck and a deckhouse aft.
@@ -177,6 +185,9 @@ impl ObjectConfig {
                 "in [0.001, 1]",
                 self.roughness,
             ));
+        }
+        if !(self.ior >= 1.0 && self.ior <= 4.0) {
+            return Err(invalid(&field("ior"), "in [1, 4]", self.ior));
         }
         let s = &self.ship;
         for (f, v) in [

@@ -144,8 +144,10 @@ impl Pose {
 pub struct PlacedObject {
     pub name: String,
     pub material: crate::config::Material,
-    /// A metal's GGX roughness alpha.
+    /// A metal's or glass's GGX roughness alpha.
     pub roughness: f32,
+    /// Glass's index of refraction.
+    pub ior: f32,
     /// The sea's plane under it (floating objects; `None` for fixed ones).
     pub plane: Option<Plane>,
     /// Its mesh's origin in the scene (camera-relative x, z; y above mean sea level), m.
@@ -217,6 +219,7 @@ impl SceneObjects {
                 name: cfg.display_name(k),
                 material: cfg.material,
                 roughness: cfg.roughness as f32,
+                ior: cfg.ior as f32,
                 plane: pose.plane,
                 origin: curved_frame_position(
                     rel[0],

@@ -89,6 +89,10 @@ pub struct Counters {
     pub object_hits: u64,
     #[serde(default)]
     pub sun_object_occluded: u64,
+    /// Rays inside a glass object that met none of its surface before the path's last segment
+    /// (an open or inward-wound mesh lets them out): they return nothing.
+    #[serde(default)]
+    pub object_leaks: u64,
 }
 
 impl std::ops::AddAssign for Counters {
@@ -123,6 +127,7 @@ impl std::ops::AddAssign for Counters {
         self.object_rays += o.object_rays;
         self.object_hits += o.object_hits;
         self.sun_object_occluded += o.sun_object_occluded;
+        self.object_leaks += o.object_leaks;
     }
 }
 

@@ -67,10 +67,9 @@ impl Ggx {
         self.g1(wo) * self.d(h) / (4.0 * wo.z)
     }
 
-    /// A reflected direction drawn from the visible normals seen from `wo`, from two uniform
-    /// numbers, and its weight f cos / pdf = F G2 / G1(wo); `None` when it leaves below the
-    /// surface (the path ends: its light is the masking's loss).
-    pub fn sample(&self, wo: Vec3, u1: f32, u2: f32) -> Option<(Vec3, Vec3)> {
+    /// A microfacet normal drawn from those visible from `wo` (above the surface), from two
+    /// uniform numbers: density G1(wo) max(0, wo.m) D(m) / wo.z.
+    pub fn visible_normal(&self, wo: Vec3, u1: f32, u2: f32) -> Vec3 {
         let a = self.alpha;
         let vh = Vec3::new(a * wo.x, a * wo.y, wo.z).normalize();
         let len2 = vh.x * vh.x + vh.y * vh.y;
@@ -86,7 +85,14 @@ impl Ggx {
         let s = 0.5 * (1.0 + vh.z);
         p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * p2;
         let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
-        let m = Vec3::new(a * nh.x, a * nh.y, nh.z.max(1e-7)).normalize();
+        Vec3::new(a * nh.x, a * nh.y, nh.z.max(1e-7)).normalize()
+    }
+
+    /// A reflected direction drawn from the visible normals seen from `wo`, from two uniform
+    /// numbers, and its weight f cos / pdf = F G2 / G1(wo); `None` when it leaves below the
+    /// surface (the path ends: its light is the masking's loss).
+    pub fn sample(&self, wo: Vec3, u1: f32, u2: f32) -> Option<(Vec3, Vec3)> {
+        let m = self.visible_normal(wo, u1, u2);
         let wi = 2.0 * wo.dot(m) * m - wo;
         if wi.z <= 0.0 {
             return None;

@@ -161,6 +161,7 @@ impl SceneRef<'_> {
             sample: 0,
             parent: None,
             in_water,
+            in_object: false,
             width_m: 0.0,
             sun_pdf: 0.0,
         };
@@ -228,6 +229,7 @@ impl SceneRef<'_> {
                 sample: i as u8,
                 parent: None,
                 in_water: false,
+                in_object: false,
                 width_m: 0.0,
                 sun_pdf: 0.0,
             };
@@ -284,8 +286,16 @@ impl SceneRef<'_> {
         let mut sky_entry = [0u8; CAMERA_BATCH];
         let mut n_sky = 0;
         for (k, e) in entries.iter().enumerate() {
-            let answer =
-                self.answer_untraced(&e.ray, e.in_water, e.parent.is_some(), segment, settings, c);
+            let answer = if e.in_object {
+                // inside glass: its own surface ahead, or (at the path's end, or through a
+                // crack of an open mesh) nothing
+                if obj_hits[k].is_none() && segment < settings.max_segments {
+                    c.object_leaks += 1;
+                }
+                Untraced::Known(Vec3::ZERO)
+            } else {
+                self.answer_untraced(&e.ray, e.in_water, e.parent.is_some(), segment, settings, c)
+            };
             match (answer, obj_hits[k]) {
                 // the sea cannot be in the way
                 (Untraced::Known(_) | Untraced::Sky, Some(_)) => {
@@ -462,16 +472,17 @@ impl SceneRef<'_> {
             let mut b = 0;
             // an object's bounce rides with the first branches
             for (jo, (k, o)) in objects.iter().enumerate().filter(|_| pass == 0) {
-                let Some((w, sun_pdf)) = o.bounce else {
+                let Some(bounce) = o.bounce else {
                     continue;
                 };
                 batch[b] = PathVertex {
-                    ray: o.sp.spawn(w),
+                    ray: o.sp.spawn(bounce.dir),
                     sample: entries[*k as usize].sample,
                     parent: None,
-                    in_water: o.in_water,
+                    in_water: bounce.in_water,
+                    in_object: bounce.in_object,
                     width_m: o.width_m,
-                    sun_pdf,
+                    sun_pdf: bounce.sun_pdf,
                 };
                 of[b] = (n_shaded + jo) as u8;
                 b += 1;
@@ -483,6 +494,7 @@ impl SceneRef<'_> {
                         sample: entries[*k as usize].sample,
                         parent: Some(s.sp.prim),
                         in_water,
+                        in_object: false,
                         width_m: s.width_m,
                         sun_pdf,
                     };
@@ -530,6 +542,8 @@ struct PathVertex {
     sample: u8,
     parent: Option<u32>,
     in_water: bool,
+    /// The ray travels inside a glass object, where the sea is not: only objects are traced.
+    in_object: bool,
     /// The ray's footprint width at its origin, m (it grows by the pixel's spread per metre).
     width_m: f32,
     /// The density with which a rough hit that sampled the sun chose this ray's direction: the
@@ -548,6 +562,7 @@ impl PathVertex {
         sample: 0,
         parent: None,
         in_water: false,
+        in_object: false,
         width_m: 0.0,
         sun_pdf: 0.0,
     };

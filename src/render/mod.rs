@@ -6,6 +6,7 @@ pub mod aov;
 mod bsdf;
 pub mod camera;
 pub mod counters;
+pub mod dielectric;
 pub mod earth_tilt;
 pub mod film;
 pub mod footprint;

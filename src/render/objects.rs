@@ -12,6 +12,7 @@
 use glam::Vec3;
 
 use super::counters::Counters;
+use super::dielectric::RoughDielectric;
 use super::ggx::{Frame, Ggx};
 use super::integrator::{CAMERA_BATCH, SceneRef, TraceSettings};
 use super::interface::{SurfacePoint, surface_point};
@@ -30,13 +31,32 @@ pub(super) struct ObjectScatter {
     /// The water's attenuation of that segment alone (for the sun's direct light, which the
     /// hit reflects with its albedo already in it).
     pub(super) attenuation: Vec3,
-    pub(super) in_water: bool,
     pub(super) width_m: f32,
-    /// The bounce's direction and the density the sun it finds is weighed with (0: full);
-    /// `None` where a metal's sample left below the surface.
-    pub(super) bounce: Option<(Vec3, f32)>,
+    /// The bounce; `None` where a metal's or glass's sample left on the wrong side of the
+    /// surface.
+    pub(super) bounce: Option<Bounce>,
     /// The sun's sampled direct light: the shadow ray and the radiance it brings if clear.
     pub(super) sun: Option<(Ray, Vec3)>,
+}
+
+/// The ray an object hit sends on.
+#[derive(Clone, Copy)]
+pub(super) struct Bounce {
+    pub(super) dir: Vec3,
+    /// The density the sun it finds is weighed with (0: full weight).
+    pub(super) sun_pdf: f32,
+    /// The medium it travels in: the water, or inside a glass object (which the sea does not
+    /// enter).
+    pub(super) in_water: bool,
+    pub(super) in_object: bool,
+}
+
+/// An object's surface at a hit.
+enum Surface {
+    Diffuse,
+    Metal(Ggx),
+    /// With whether a ray refracted out of it goes into the water.
+    Glass(RoughDielectric, bool),
 }
 
 impl ObjectScatter {
@@ -49,7 +69,6 @@ impl ObjectScatter {
         },
         weight: Vec3::ZERO,
         attenuation: Vec3::ZERO,
-        in_water: false,
         width_m: 0.0,
         bounce: None,
         sun: None,
@@ -92,8 +111,9 @@ impl SceneRef<'_> {
     }
 
     /// Shading at an object hit of `ray` (travelling in the water when `in_water`): in the air
-    /// the sun sampled (two numbers, drawn first), then the bounce (two more): cosine-weighted
-    /// for a diffuse object, by GGX's visible normals for a metal one.
+    /// the sun sampled (two numbers, drawn first), then the bounce: cosine-weighted for a
+    /// diffuse object, by GGX's visible normals for a metal one (two numbers), and for glass
+    /// reflected or refracted by the microfacet's Fresnel (three).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn scatter_object(
         &self,
@@ -109,26 +129,63 @@ impl SceneRef<'_> {
         c.object_hits += 1;
         let sp = surface_point(objects.accel.mesh(), hit);
         let d = Vec3::from(ray.dir);
-        // the side the ray came from (both sides of an object's triangle are its surface)
-        let n = if d.dot(sp.ng) > 0.0 { -sp.ng } else { sp.ng };
+        // the side the ray came from (both sides of an object's triangle are its surface; a
+        // glass mesh is wound outward, so its ray comes from outside where it meets the
+        // winding's normal head on; `sp.ng` is turned up, as the sea's)
+        let [p0, p1, p2] = objects.accel.mesh().triangle(hit.prim).map(Vec3::from);
+        let outward = if (p1 - p0).cross(p2 - p0).dot(sp.ng) < 0.0 {
+            -sp.ng
+        } else {
+            sp.ng
+        };
+        let from_outside = d.dot(outward) < 0.0;
+        let n = if from_outside { outward } else { -outward };
         let albedo = objects.albedo_of[hit.prim as usize];
         let object = objects.object(hit.prim);
-        let metal = (object.material == Material::Metal).then_some(Ggx {
-            alpha: object.roughness,
-            f0: albedo,
-        });
+        let surface = match object.material {
+            Material::Diffuse => Surface::Diffuse,
+            Material::Metal => Surface::Metal(Ggx {
+                alpha: object.roughness,
+                f0: albedo,
+            }),
+            Material::Glass => {
+                // the medium outside: the ray's own when it arrives from outside; where it
+                // leaves, the water below the sea's surface and the air above it
+                let exit_in_water = !from_outside && self.below_sea(sp.p);
+                let outside = if (from_outside && in_water) || exit_in_water {
+                    settings.water.ior
+                } else {
+                    1.0
+                };
+                let eta = if from_outside {
+                    object.ior / outside
+                } else {
+                    outside / object.ior
+                };
+                Surface::Glass(
+                    RoughDielectric {
+                        alpha: object.roughness,
+                        eta,
+                    },
+                    exit_in_water,
+                )
+            }
+        };
         let frame = Frame::new(n);
         let wo = frame.to_local(-d);
-        // the BSDF times the cosine, and the density the bounce gives direction w
+        // the BSDF times the cosine, and the density the bounce gives direction w (on the
+        // ray's side of the surface)
         let reflect = |w: Vec3| -> (Vec3, f32) {
-            match &metal {
-                None => {
-                    let cos = n.dot(w).max(0.0);
+            let wi = frame.to_local(w);
+            match &surface {
+                Surface::Diffuse => {
+                    let cos = wi.z.max(0.0);
                     (albedo * cos * FRAC_1_PI, cos * FRAC_1_PI)
                 }
-                Some(g) => {
-                    let wi = frame.to_local(w);
-                    (g.f(wo, wi) * wi.z.max(0.0), g.pdf(wo, wi))
+                Surface::Metal(g) => (g.f(wo, wi) * wi.z.max(0.0), g.pdf(wo, wi)),
+                Surface::Glass(b, _) => {
+                    let (f, pdf) = b.eval(wo, wi);
+                    (Vec3::splat(f * wi.z.max(0.0)), pdf)
                 }
             }
         };
@@ -138,8 +195,11 @@ impl SceneRef<'_> {
             Vec3::ONE
         };
         let mut sun = None;
-        let sun_sampled = !in_water && self.sun.is_some();
-        if let (Some(light), false) = (&self.sun, in_water) {
+        // (from inside glass the sun is behind its surface; an opaque object's either side
+        // may face it)
+        let glass = matches!(surface, Surface::Glass(..));
+        let sun_sampled = !in_water && (from_outside || !glass) && self.sun.is_some();
+        if let (Some(light), true) = (&self.sun, sun_sampled) {
             let s = light.sample(sp.p, rng.f32(), rng.f32());
             if n.dot(s.d) > 0.0 && s.pdf > 0.0 {
                 let (f_cos, bounce_pdf) = reflect(s.d);
@@ -147,28 +207,63 @@ impl SceneRef<'_> {
                 sun = Some((sp.spawn(s.d), f_cos * light.radiance(&s) * (w / s.pdf)));
             }
         }
-        let (u1, u2) = (rng.f32(), rng.f32());
-        let (bounce, weight) = match &metal {
-            None => {
-                let (w, cos) = cosine_direction(&frame, u1, u2);
-                (Some((w, cos * FRAC_1_PI)), albedo)
+        // the bounce's direction, the density the sun it finds is weighed with, its medium
+        // (in the water, inside the object) and its weight
+        let (bounce, weight) = match &surface {
+            Surface::Diffuse => {
+                let (w, cos) = cosine_direction(&frame, rng.f32(), rng.f32());
+                (Some((w, cos * FRAC_1_PI, in_water, false)), albedo)
             }
-            Some(g) => match g.sample(wo, u1, u2) {
-                Some((wi, weight)) => (Some((frame.from_local(wi), g.pdf(wo, wi))), weight),
+            Surface::Metal(g) => match g.sample(wo, rng.f32(), rng.f32()) {
+                Some((wi, weight)) => (
+                    Some((frame.from_local(wi), g.pdf(wo, wi), in_water, false)),
+                    weight,
+                ),
                 // it leaves below the surface: masked, its light lost
                 None => (None, Vec3::ZERO),
             },
+            Surface::Glass(b, exit_in_water) => {
+                let (u1, u2, u3) = (rng.f32(), rng.f32(), rng.f32());
+                match b.sample(wo, u1, u2, u3) {
+                    // refracted: into the object, or out of it into the water or the air; the
+                    // sun beyond is not sampled from here (full weight)
+                    Some(s) if s.refracted => (
+                        Some((frame.from_local(s.wi), 0.0, *exit_in_water, from_outside)),
+                        albedo * s.weight,
+                    ),
+                    Some(s) => (
+                        Some((frame.from_local(s.wi), s.pdf, in_water, !from_outside)),
+                        Vec3::splat(s.weight),
+                    ),
+                    None => (None, Vec3::ZERO),
+                }
+            }
         };
         ObjectScatter {
             sp,
             weight: attenuation * weight,
             attenuation,
-            in_water,
             width_m,
             // the sun the bounce finds is weighed against the sun's own samples
-            bounce: bounce.map(|(w, pdf)| (w, if sun_sampled { pdf } else { 0.0 })),
+            bounce: bounce.map(|(w, pdf, water, object)| Bounce {
+                dir: w,
+                sun_pdf: if sun_sampled { pdf } else { 0.0 },
+                in_water: water,
+                in_object: object,
+            }),
             sun,
         }
+    }
+
+    /// Whether scene point `p` lies below the sea's surface (its height where the displaced
+    /// surface stands over p, lowered by the earth's curvature).
+    fn below_sea(&self, p: Vec3) -> bool {
+        let Some(sampler) = &self.ocean else {
+            return p.y < 0.0;
+        };
+        let (x, z) = (p.x as f64, p.z as f64);
+        let drop = (x * x + z * z) / (2.0 * self.earth_radius_m);
+        (p.y as f64) < crate::objects::surface_height_at(sampler, p.x, p.z) - drop
     }
 
     /// The sun light sampled at up to [`CAMERA_BATCH`] hits, `suns[j]` = (shadow ray, light):

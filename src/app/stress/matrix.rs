@@ -338,13 +338,13 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
         },
         Extra::Furnace,
     );
-    // A white Lambertian ship floating in view, and a white metal one held just above the
-    // sea beside the camera: light between the sea and the objects may bounce many times,
+    // A white Lambertian ship floating in view, a white metal one held just above the sea
+    // beside the camera, and a clear glass one floating half under the water: light between the sea and the objects may bounce many times,
     // and still no pixel may exceed the sky's 1.
     add(
         "furnace-objects",
         "white furnace",
-        "uniform sky 1, white diffuse and metal ships".into(),
+        "uniform sky 1, white diffuse, metal and glass ships".into(),
         &|s| {
             furnace(s);
             let white = [1.0; 3];
@@ -364,6 +364,13 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
                     float: false,
                     material: crate::config::Material::Metal,
                     albedo: white,
+                    ..Default::default()
+                },
+                crate::config::ObjectConfig {
+                    position_m: [-25.0, 15.0],
+                    material: crate::config::Material::Glass,
+                    albedo: white,
+                    roughness: 0.05,
                     ..Default::default()
                 },
             ];

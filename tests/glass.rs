@@ -1,0 +1,101 @@
+//! Glass objects (`material = "glass"`): a clear slab seen straight down passes the sea
+//! below it by the Fresnel equations' transmission, with its internal reflections summed; a
+//! mesh wound inward is noticed.
+
+use vastocean::config::{AnalyticSky, Material, ObjectConfig, Projection, SceneConfig};
+use vastocean::render::pipeline::prepare;
+
+/// A closed box 2a wide and 2t thick about the origin, faces wound outward, as OBJ text.
+fn slab_obj(a: f64, t: f64) -> String {
+    let mut s = String::new();
+    for (x, y, z) in [
+        (-a, -t, -a),
+        (a, -t, -a),
+        (a, -t, a),
+        (-a, -t, a),
+        (-a, t, -a),
+        (a, t, -a),
+        (a, t, a),
+        (-a, t, a),
+    ] {
+        s += &format!("v {x} {y} {z}\n");
+    }
+    for f in [
+        "5 8 7", "5 7 6", "1 2 3", "1 3 4", "1 5 6", "1 6 2", "4 3 7", "4 7 8", "1 4 8", "1 8 5",
+        "2 6 7", "2 7 3",
+    ] {
+        s += &format!("f {f}\n");
+    }
+    s
+}
+
+/// A pinhole 260 m up looking straight down through a 20 m wide, 1 m thick slab held 200 m
+/// up (or not), under a uniform sky of 1: (mean luminance, its standard error).
+fn through_slab(slab: Option<&std::path::Path>, ior: f64) -> (f64, f64) {
+    let mut cfg = SceneConfig::default();
+    cfg.camera.height_m = 260.0;
+    cfg.camera.width = 48;
+    cfg.camera.aspect = 1.0;
+    cfg.camera.projection = Projection::Pinhole {
+        hfov_deg: 2.0,
+        yaw_deg: 0.0,
+        pitch_deg: -90.0,
+        roll_deg: 0.0,
+    };
+    cfg.render.spp = 256;
+    cfg.sky.analytic = AnalyticSky::Uniform { radiance: [1.0; 3] };
+    if let Some(mesh) = slab {
+        cfg.objects = vec![ObjectConfig {
+            mesh: mesh.to_path_buf(),
+            float: false,
+            height_m: 200.0,
+            material: Material::Glass,
+            albedo: [1.0; 3],
+            roughness: 0.001,
+            ior,
+            ..ObjectConfig::default()
+        }];
+    }
+    let r = prepare(&cfg).unwrap().render(&cfg, false).unwrap();
+    let lum = |c: [f32; 3]| vastocean::color::luminance(c) as f64;
+    let n = r.film.image.pixels.len() as f64;
+    let mean = r.film.image.pixels.iter().map(|&c| lum(c)).sum::<f64>() / n;
+    let se = (r.film.var_y.iter().map(|&v| v as f64).sum::<f64>()).sqrt() / n;
+    assert_eq!(r.report.nan_count, 0);
+    (mean, se)
+}
+
+/// Through a clear slab at normal incidence the sea is seen with the slab's transmission
+/// T = (1 - R) / (1 + R) (both faces and every internal reflection; R = ((n - 1) / (n + 1))^2),
+/// and the sky of 1 it reflects fills the rest: L = T L_sea + (1 - T). At n = 1 the slab is
+/// not there at all.
+#[test]
+fn a_glass_slab_passes_the_sea_by_the_fresnel_equations() {
+    let dir = std::env::temp_dir().join(format!("vastocean-glass-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mesh = dir.join("slab.obj");
+    std::fs::write(&mesh, slab_obj(10.0, 0.5)).unwrap();
+    let (sea, sea_se) = through_slab(None, 1.5);
+    for ior in [1.5, 2.4] {
+        let (glass, glass_se) = through_slab(Some(&mesh), ior);
+        let r = ((ior - 1.0) / (ior + 1.0)).powi(2);
+        let t = (1.0 - r) / (1.0 + r);
+        let expected = t * sea + (1.0 - t);
+        let se = (glass_se.powi(2) + (t * sea_se).powi(2)).sqrt();
+        assert!(
+            (glass - expected).abs() < 4.0 * se + 0.002,
+            "n = {ior}: through the slab {glass:.5} +- {glass_se:.5}, T L_sea + 1 - T = \
+             {expected:.5} (sea {sea:.5} +- {sea_se:.5}, T {t:.4})"
+        );
+        assert!(
+            (glass - sea).abs() > 4.0 * se,
+            "the slab is seen: {glass} {sea}"
+        );
+    }
+    let (air, air_se) = through_slab(Some(&mesh), 1.0);
+    assert!(
+        (air - sea).abs() < 4.0 * (air_se.powi(2) + sea_se.powi(2)).sqrt() + 1e-4,
+        "a slab of n = 1 is not there: {air} against {sea}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
