@@ -31,16 +31,40 @@ fn placed(cfg: &SceneConfig, backend: Backend) -> SceneObjects {
         .expect("one object")
 }
 
-/// Rays from around the ship at its points: every backend finds the brute-force oracle's
-/// triangle (or a neighbour at the same distance, on a shared edge) at its distance.
+/// Rays from around the ships at their points: every backend's instances (Embree's instance
+/// geometries, the Rust BVH's loop over instance boxes) find the brute-force oracle's hit on
+/// the placed triangles at its distance, on the same object. Two of the three ships share one
+/// mesh (one prototype, two instances).
 #[test]
-fn the_ship_is_hit_alike_by_every_backend_and_the_oracle() {
-    let cfg = ship_scene(60.0, -20.0, true);
-    let objects = placed(&cfg, Backend::Rust);
-    let mesh = objects.accel.mesh().clone();
+fn the_ships_are_hit_alike_by_every_backend_and_the_oracle() {
+    let mut cfg = ship_scene(60.0, -20.0, true);
+    cfg.objects.push(ObjectConfig {
+        position_m: [75.0, 10.0],
+        heading_deg: -50.0,
+        ..ObjectConfig::default()
+    });
+    cfg.objects.push(ObjectConfig {
+        position_m: [40.0, 30.0],
+        scale: 0.5,
+        float: false,
+        height_m: 1.0,
+        ..ObjectConfig::default()
+    });
+    let mut backends = vec![placed(&cfg, Backend::Rust)];
+    if cfg!(feature = "embree") {
+        backends.push(placed(&cfg, Backend::Embree));
+    }
+    assert_eq!(
+        backends[0].prototypes.len(),
+        2,
+        "the same mesh at the same scale is shared"
+    );
+    assert_eq!(backends[0].instances.len(), 3);
+    let mesh = backends[0].scene_mesh();
+    assert_eq!(mesh.triangle_count(), 3 * 1836);
     let oracle = BruteForce::new(mesh.clone());
     let mut rng = Rng::keyed(&[35, 1]);
-    let rays: Vec<Ray> = (0..4000)
+    let rays: Vec<Ray> = (0..6000)
         .map(|i| {
             let target = Vec3::from(mesh.positions()[i * 7 % mesh.vertex_count()])
                 + 0.3 * Vec3::from(rng.unit_vector());
@@ -48,33 +72,33 @@ fn the_ship_is_hit_alike_by_every_backend_and_the_oracle() {
             Ray::new(org.to_array(), (target - org).normalize().to_array())
         })
         .collect();
-    let mut hits = 0;
-    for accel in vastocean_backends(mesh) {
+    for objects in &backends {
+        let name = objects.backend_name();
+        let mut hits = 0;
         for ray in &rays {
-            let (a, b) = (accel.intersect(ray), oracle.intersect(ray));
-            match (a, b) {
+            match (objects.intersect(ray), oracle.intersect(ray)) {
                 (Some(a), Some(b)) => {
                     hits += 1;
                     assert!(
                         (a.t - b.t).abs() <= 1e-4 * b.t.max(1.0),
-                        "{}: t {} against the oracle's {} (prims {} and {})",
-                        accel.name(),
+                        "{name}: t {} against the oracle's {} (prims {} and {})",
                         a.t,
                         b.t,
                         a.prim,
                         b.prim
                     );
+                    assert_eq!(
+                        objects.locate(a.prim).0,
+                        objects.locate(b.prim).0,
+                        "{name}: the same object"
+                    );
                 }
                 (None, None) => {}
-                (a, b) => panic!("{}: {a:?} against the oracle's {b:?}", accel.name()),
+                (a, b) => panic!("{name}: {a:?} against the oracle's {b:?}"),
             }
         }
+        assert!(hits > 3000, "{name}: most rays aim at a ship: {hits} hits");
     }
-    assert!(hits > 2000, "most rays aim at the ship: {hits} hits");
-}
-
-fn vastocean_backends(mesh: vastocean::mesh::Mesh) -> Vec<Box<dyn Accel>> {
-    crate::common::backends(mesh)
 }
 
 /// On a calm sea (1 mm RMS) the floating ship sits at its design waterline: its keel at the
@@ -87,8 +111,7 @@ fn a_floating_ship_sits_at_its_draft_on_a_calm_sea_and_on_the_waves_on_a_rough_o
     calm.ocean.rms_m = Some(0.001);
     let objects = placed(&calm, Backend::Rust);
     let keel = objects
-        .accel
-        .mesh()
+        .scene_mesh()
         .positions()
         .iter()
         .map(|p| p[1])

@@ -198,6 +198,19 @@ void *vo_scene_attach_triangles(void *device, void *scene, vo_quality quality, c
   return g;
 }
 
+void *vo_scene_attach_instance(void *device, void *scene, void *child, const float xfm[12], uint32_t *geom_id) {
+  RTCGeometry g = rtcNewGeometry(vo_raw(device), RTC_GEOMETRY_TYPE_INSTANCE);
+  if (!g) return NULL;
+  rtcSetGeometryInstancedScene(g, (RTCScene)child);
+  rtcSetGeometryTimeStepCount(g, 1);
+  rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
+  rtcCommitGeometry(g);
+  unsigned id = rtcAttachGeometry((RTCScene)scene, g);
+  rtcReleaseGeometry(g);
+  if (geom_id) *geom_id = id;
+  return g;
+}
+
 void vo_scene_commit(void *scene) { rtcCommitScene((RTCScene)scene); }
 
 void vo_scene_refit(void *scene, void *geometry) {
@@ -333,6 +346,7 @@ static void vo_intersect_context(void *scene, const vo_ray *ray, vo_hit *hit, vo
     hit->u = hit->v = 0.0f;
     hit->prim = VO_INVALID_ID;
     hit->geom = VO_INVALID_ID;
+    hit->inst = VO_INVALID_ID;
     hit->ng[0] = hit->ng[1] = hit->ng[2] = 0.0f;
     return;
   }
@@ -341,6 +355,7 @@ static void vo_intersect_context(void *scene, const vo_ray *ray, vo_hit *hit, vo
   hit->v = rh.hit.v;
   hit->prim = rh.hit.primID;
   hit->geom = rh.hit.geomID;
+  hit->inst = rh.hit.instID[0];
   hit->ng[0] = rh.hit.Ng_x;
   hit->ng[1] = rh.hit.Ng_y;
   hit->ng[2] = rh.hit.Ng_z;

@@ -45,13 +45,16 @@ typedef struct vo_ray {
 
 /* The closest hit of a ray: prim == VO_INVALID_ID when it missed. (u, v) are Embree's
  * barycentrics: the hit point is (1-u-v)*v0 + u*v1 + v*v2. ng is the unnormalized geometric
- * normal (v1-v0) x (v2-v0) as Embree reports it. */
+ * normal (v1-v0) x (v2-v0) as Embree reports it (in the instance's own space for an instance's
+ * hit). inst is the id of the instance geometry the hit lies in, VO_INVALID_ID for a hit on a
+ * geometry of the traced scene itself. */
 typedef struct vo_hit {
   float t;
   float u;
   float v;
   uint32_t prim;
   uint32_t geom;
+  uint32_t inst;
   float ng[3];
 } vo_hit;
 
@@ -94,6 +97,12 @@ void vo_scene_release(void *scene);
 void *vo_scene_attach_triangles(void *device, void *scene, vo_quality quality, const float *positions,
                                 size_t vertex_count, const uint32_t *indices, size_t triangle_count,
                                 const float *uvs, uint32_t *geom_id);
+/* Attaches an instance of the committed scene `child` (which must outlive `scene`), placed by
+ * the affine transform xfm (3x4, column-major: the three columns of the linear part, then the
+ * translation; from the child's space into the scene's), and commits the geometry. Returns the
+ * geometry handle (owned by the scene) or NULL on error; *geom_id receives its id, which hits
+ * inside it report as their inst. */
+void *vo_scene_attach_instance(void *device, void *scene, void *child, const float xfm[12], uint32_t *geom_id);
 void vo_scene_commit(void *scene);
 /* After the caller changed the vertex buffer in place: tells Embree, commits the geometry and
  * the scene. With the geometry attached at VO_QUALITY_REFIT, Embree refits the BVH's bounds

@@ -141,10 +141,15 @@ impl fmt::Display for RenderReport {
         )?;
         writeln!(
             f,
-            "  seconds: ocean {:.2}, tessellation {:.2}, BVH {:.2}, trace {:.2} (normal mapping ~{:.2}, {:.1}%), total {:.2}",
+            "  seconds: ocean {:.2}, tessellation {:.2}, BVH {:.2}{}, trace {:.2} (normal mapping ~{:.2}, {:.1}%), total {:.2}",
             self.seconds_ocean,
             self.seconds_tessellation,
             self.seconds_build,
+            if self.objects.is_empty() {
+                String::new()
+            } else {
+                format!(", objects {:.2}", self.seconds_objects)
+            },
             self.seconds_trace,
             self.seconds_normal_map,
             100.0 * self.normal_map_share,

@@ -5,23 +5,24 @@
 //! the nearer hit (`crate::render::objects`).
 
 pub mod float;
+pub mod instances;
 pub mod load;
 pub mod mount;
 pub mod ship;
 
 use std::path::PathBuf;
-use std::sync::Arc;
 
-use glam::{DMat3, DVec3, Vec3};
+use glam::{Affine3A, DMat3, DVec3, Mat3, Vec3};
 use thiserror::Error;
 
-use crate::accel::{Accel, Ray, bvh::Bvh};
+use crate::accel::{Hit, Ray};
 use crate::config::{Backend, ObjectConfig};
 use crate::lod::curved_frame_position;
 use crate::mesh::Mesh;
 use crate::ocean::Sampler;
 use crate::render::aov::AovLayers;
 use float::Plane;
+pub use instances::{Instance, InstanceAccel, Prototype};
 
 #[derive(Debug, Error)]
 pub enum ObjectError {
@@ -148,24 +149,24 @@ pub struct PlacedObject {
     pub roughness: f32,
     /// Glass's index of refraction.
     pub ior: f32,
+    /// Its `albedo`, linear RGB.
+    pub albedo: Vec3,
     /// The sea's plane under it (floating objects; `None` for fixed ones).
     pub plane: Option<Plane>,
     /// Its mesh's origin in the scene (camera-relative x, z; y above mean sea level), m.
     pub origin: [f64; 3],
-    /// Its triangles in the scene's mesh: `first..first + count`.
-    pub first_triangle: u32,
     pub triangle_count: u32,
 }
 
-/// All objects of a scene in one mesh, with the structure that traces it.
+/// All objects of a scene: each an instance of a shared mesh ([`instances`]), with the
+/// structure that traces them.
 pub struct SceneObjects {
-    pub accel: Box<dyn Accel>,
-    /// Each triangle's object (an index into `placed`).
-    pub object_of: Vec<u32>,
-    /// Each triangle's diffuse reflectance, linear RGB.
-    pub albedo_of: Vec<Vec3>,
+    pub prototypes: Vec<Prototype>,
+    /// One per object, in `placed`'s order, their triangle ids in ascending ranges.
+    pub instances: Vec<Instance>,
+    accel: InstanceAccel,
     pub placed: Vec<PlacedObject>,
-    /// The mesh's bounds, a hair wider: rays that miss them are not traced.
+    /// All instances' bounds: rays that miss them are not traced.
     lo: Vec3,
     hi: Vec3,
     /// Seconds reading, placing and building took.
@@ -175,7 +176,8 @@ pub struct SceneObjects {
 impl SceneObjects {
     /// Places the objects of `configs` on the sea of `sampler` (camera-relative, camera at
     /// world `camera_m`) and builds their structure with `backend` on `threads` threads
-    /// (0 = all). `None` when there are no objects.
+    /// (0 = all): objects with the same mesh file (or ship dimensions) and scale share one
+    /// prototype. `None` when there are no objects.
     pub fn build(
         configs: &[ObjectConfig],
         sampler: &Sampler,
@@ -188,70 +190,144 @@ impl SceneObjects {
             return Ok(None);
         }
         let t = std::time::Instant::now();
-        let (mut positions, mut indices) = (Vec::new(), Vec::new());
-        let (mut object_of, mut albedo_of) = (Vec::new(), Vec::new());
-        let mut placed = Vec::with_capacity(configs.len());
+        let mut prototypes: Vec<Prototype> = Vec::new();
+        let mut keys: Vec<(String, LocalMesh)> = Vec::new();
+        let (mut instances, mut placed) = (Vec::new(), Vec::with_capacity(configs.len()));
+        let mut base = 0u32;
         for (k, cfg) in configs.iter().enumerate() {
-            let local = LocalMesh::of(cfg)?;
+            let key = format!(
+                "{:?} {:?} {}",
+                cfg.mesh,
+                cfg.is_built_in_ship().then_some(cfg.ship),
+                cfg.scale.to_bits()
+            );
+            let proto = match keys.iter().position(|(k, _)| *k == key) {
+                Some(i) => i,
+                None => {
+                    let local = LocalMesh::of(cfg)?;
+                    prototypes.push(Prototype::of(&local, cfg.scale)?);
+                    keys.push((key, local));
+                    prototypes.len() - 1
+                }
+            };
+            let local = &keys[proto].1;
             let rel = [
                 cfg.position_m[0] - camera_m[0],
                 cfg.position_m[1] - camera_m[1],
             ];
-            let pose = Pose::of(cfg, &local, sampler, rel);
-            let base = positions.len() as u32;
-            let first_triangle = indices.len() as u32;
-            for p in &local.positions {
-                let v = pose.place(DVec3::from(*p) * cfg.scale);
-                let w = curved_frame_position(rel[0], rel[1], v.to_array(), earth_radius_m);
-                positions.push(w.map(|c| c as f32));
-            }
-            indices.extend(local.triangles.iter().map(|t| t.map(|i| base + i)));
-            object_of.extend(std::iter::repeat_n(k as u32, local.triangles.len()));
-            let albedo = |a: [f64; 3]| Vec3::from(a.map(|c| c as f32));
-            let mut own = albedo(cfg.albedo);
-            for t in 0..local.triangles.len() {
-                if let Some(&(_, a)) = local.parts.iter().rev().find(|(from, _)| *from <= t) {
-                    own = albedo(a);
-                }
-                albedo_of.push(own);
-            }
+            let pose = Pose::of(cfg, local, sampler, rel);
+            // the placement is rigid: the images of the origin and the axes give it
+            let at = |v: DVec3| {
+                let p =
+                    curved_frame_position(rel[0], rel[1], pose.place(v).to_array(), earth_radius_m);
+                DVec3::from(p)
+            };
+            let o = at(DVec3::ZERO);
+            let axis = |v: DVec3| (at(v) - o).as_vec3();
+            let to_scene = Affine3A::from_mat3_translation(
+                Mat3::from_cols(axis(DVec3::X), axis(DVec3::Y), axis(DVec3::Z)),
+                o.as_vec3(),
+            );
+            let mesh = &prototypes[proto].mesh;
+            instances.push(Instance::new(proto as u32, mesh, to_scene, base));
+            let count = mesh.triangle_count() as u32;
+            base = base.checked_add(count).ok_or_else(|| ObjectError::Accel {
+                backend: "mesh",
+                message: "the objects hold more than 2^32 triangles".into(),
+            })?;
             placed.push(PlacedObject {
                 name: cfg.display_name(k),
                 material: cfg.material,
                 roughness: cfg.roughness as f32,
                 ior: cfg.ior as f32,
+                albedo: Vec3::from(cfg.albedo.map(|c| c as f32)),
                 plane: pose.plane,
-                origin: curved_frame_position(
-                    rel[0],
-                    rel[1],
-                    [0.0, pose.lift, 0.0],
-                    earth_radius_m,
-                ),
-                first_triangle,
-                triangle_count: local.triangles.len() as u32,
+                origin: o.to_array(),
+                triangle_count: count,
             });
         }
-        let (lo, hi) = positions.iter().fold(
+        let (lo, hi) = (instances.iter()).fold(
             (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(lo, hi), p| (lo.min(Vec3::from(*p)), hi.max(Vec3::from(*p))),
+            |(lo, hi), i: &Instance| (lo.min(i.lo), hi.max(i.hi)),
         );
-        let pad = 1e-3 + 1e-6 * lo.abs().max(hi.abs()).max_element();
-        let mesh = Mesh::new(positions, Vec::new(), Vec::new(), indices).map_err(|e| {
-            ObjectError::Accel {
-                backend: "mesh",
-                message: e.to_string(),
-            }
-        })?;
-        let accel = build_accel(Arc::new(mesh), backend, threads)?;
+        let accel = InstanceAccel::build(&prototypes, &instances, backend, threads)?;
         Ok(Some(SceneObjects {
+            prototypes,
+            instances,
             accel,
-            object_of,
-            albedo_of,
             placed,
-            lo: lo - pad,
-            hi: hi + pad,
+            lo,
+            hi,
             build_seconds: t.elapsed().as_secs_f64(),
         }))
+    }
+
+    /// The closest object hit of each ray (`None` where it meets none).
+    pub fn intersect_many(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
+        self.accel.intersect_many(&self.instances, rays, hits);
+    }
+
+    /// The closest object hit of `ray`.
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let mut hit = [None];
+        self.intersect_many(std::slice::from_ref(ray), &mut hit);
+        hit[0]
+    }
+
+    /// An error the backend reported while tracing, if any.
+    pub fn take_error(&self) -> Option<String> {
+        self.accel.take_error()
+    }
+
+    /// The backend that traces the objects.
+    pub fn backend_name(&self) -> &'static str {
+        self.accel.name()
+    }
+
+    /// The object (an index into `placed`) and its prototype's triangle of triangle id `prim`.
+    #[inline]
+    pub fn locate(&self, prim: u32) -> (usize, u32) {
+        let k = self.instances.partition_point(|i| i.base <= prim) - 1;
+        (k, prim - self.instances[k].base)
+    }
+
+    /// The object a triangle belongs to.
+    pub fn object(&self, prim: u32) -> &PlacedObject {
+        &self.placed[self.locate(prim).0]
+    }
+
+    /// A triangle's diffuse reflectance (or a metal's F0, glass's transmittance), linear RGB.
+    pub fn albedo(&self, prim: u32) -> Vec3 {
+        let (k, t) = self.locate(prim);
+        let proto = &self.prototypes[self.instances[k].prototype as usize];
+        proto.part_albedo[t as usize].unwrap_or(self.placed[k].albedo)
+    }
+
+    /// A triangle's corners in the scene.
+    pub fn triangle(&self, prim: u32) -> [Vec3; 3] {
+        let (k, t) = self.locate(prim);
+        let inst = &self.instances[k];
+        let mesh = &self.prototypes[inst.prototype as usize].mesh;
+        mesh.triangle(t)
+            .map(|p| inst.to_scene.transform_point3(Vec3::from(p)))
+    }
+
+    /// Every object's triangles in the scene as one mesh, triangle ids as in hits (for
+    /// oracles, exports and tests; rendering traces the instances).
+    pub fn scene_mesh(&self) -> Mesh {
+        let (mut positions, mut indices) = (Vec::new(), Vec::new());
+        for inst in &self.instances {
+            let mesh = &self.prototypes[inst.prototype as usize].mesh;
+            let first = positions.len() as u32;
+            positions.extend(
+                mesh.positions()
+                    .iter()
+                    .map(|p| inst.to_scene.transform_point3(Vec3::from(*p)).to_array()),
+            );
+            indices.extend(mesh.indices().iter().map(|t| t.map(|i| first + i)));
+        }
+        Mesh::new(positions, Vec::new(), Vec::new(), indices)
+            .expect("the prototypes' meshes were checked")
     }
 
     /// Whether `ray` may meet an object: it crosses the objects' bounds within its range.
@@ -264,11 +340,6 @@ impl SceneObjects {
         let far = t0.max(t1).min_element().min(ray.tfar);
         // NaN (a zero direction component through a slab's plane) counts as a possible hit
         near <= far || near.is_nan() || far.is_nan()
-    }
-
-    /// The object a triangle of the mesh belongs to.
-    pub fn object(&self, prim: u32) -> &PlacedObject {
-        &self.placed[self.object_of[prim as usize] as usize]
     }
 }
 
@@ -356,33 +427,4 @@ pub fn surface_height_at(sampler: &Sampler, x: f32, z: f32) -> f64 {
         }
     }
     sampler.sample(u, v).height as f64
-}
-
-/// The structure over `mesh` a backend builds (`threads`: Embree's device's).
-#[cfg_attr(not(feature = "embree"), allow(unused_variables))]
-pub fn build_accel(
-    mesh: Arc<Mesh>,
-    backend: Backend,
-    threads: usize,
-) -> Result<Box<dyn Accel>, ObjectError> {
-    match backend {
-        Backend::Rust => Ok(Box::new(Bvh::build(mesh))),
-        #[cfg(feature = "embree")]
-        Backend::Embree => {
-            use crate::accel::embree::{BuildOptions, Device, Scene};
-            let err = |e: crate::accel::embree::EmbreeError| ObjectError::Accel {
-                backend: "embree",
-                message: e.to_string(),
-            };
-            let device = Device::new(threads).map_err(err)?;
-            Ok(Box::new(
-                Scene::new(&device, mesh, BuildOptions::default()).map_err(err)?,
-            ))
-        }
-        #[cfg(not(feature = "embree"))]
-        Backend::Embree => Err(ObjectError::Accel {
-            backend: "embree",
-            message: "this build has no Embree (built without the `embree` feature)".into(),
-        }),
-    }
 }

@@ -109,7 +109,7 @@ impl SceneRef<'_> {
     fn first_hit(&self, ray: &Ray, settings: &TraceSettings) -> First {
         let d = Vec3::from(ray.dir);
         let object = self.objects.and_then(|o| {
-            let h = o.may_hit(ray).then(|| o.accel.intersect(ray))??;
+            let h = o.may_hit(ray).then(|| o.intersect(ray))??;
             Some((o, h))
         });
         let mut bounded = *ray;
@@ -130,11 +130,11 @@ impl SceneRef<'_> {
         }
         match object {
             Some((o, hit)) => {
-                let [p0, p1, p2] = o.accel.mesh().triangle(hit.prim).map(Vec3::from);
+                let [p0, p1, p2] = o.triangle(hit.prim);
                 First {
                     depth: hit.t * d.length(),
                     normal: facing((p1 - p0).cross(p2 - p0).normalize_or(Vec3::Y)),
-                    id: o.object_of[hit.prim as usize] as i32 + 1,
+                    id: o.locate(hit.prim).0 as i32 + 1,
                 }
             }
             None => First {

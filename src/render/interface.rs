@@ -22,6 +22,28 @@ pub(super) struct SurfacePoint {
     pub prim: u32,
 }
 
+/// The point of `hit` on an object's triangle `tri` (corners in the scene, placed by its
+/// instance's transform in f32), its geometric normal the winding's (v1 - v0) x (v2 - v0):
+/// outward on a mesh wound outward.
+pub(super) fn surface_point_on(tri: [Vec3; 3], hit: &Hit) -> SurfacePoint {
+    let [p0, p1, p2] = tri;
+    let (b1, b2) = (hit.u, hit.v);
+    let b0 = 1.0 - b1 - b2;
+    let p = b0 * p0 + b1 * p1 + b2 * p2;
+    // As for the sea's, plus the corners' own rounding by the transform (a few ulps of the
+    // larger of the point and the prototype's extent, bounded by their sum).
+    let extent = (p1 - p0).abs().max((p2 - p0).abs()).max_element();
+    let err = fp::barycentric_error([b0, b1, b2], [p0, p1, p2])
+        + Vec3::splat(fp::gamma(8.0) * (p.abs().max_element() + extent));
+    let ng = (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Y);
+    SurfacePoint {
+        p,
+        ng,
+        err,
+        prim: hit.prim,
+    }
+}
+
 pub(super) fn surface_point(mesh: &Mesh, hit: &Hit) -> SurfacePoint {
     let tri = mesh.indices()[hit.prim as usize];
     let [p0, p1, p2] = mesh.triangle(hit.prim).map(Vec3::from);

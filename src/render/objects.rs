@@ -15,7 +15,7 @@ use super::counters::Counters;
 use super::dielectric::RoughDielectric;
 use super::ggx::{Frame, Ggx};
 use super::integrator::{CAMERA_BATCH, SceneRef, TraceSettings};
-use super::interface::{SurfacePoint, surface_point};
+use super::interface::{SurfacePoint, surface_point_on};
 use super::microfacet::power_heuristic;
 use crate::accel::{Hit, Ray};
 use crate::config::Material;
@@ -104,7 +104,7 @@ impl SceneRef<'_> {
         }
         c.object_rays += n as u64;
         let mut found = [None; CAMERA_BATCH];
-        objects.accel.intersect_many(&traced[..n], &mut found[..n]);
+        objects.intersect_many(&traced[..n], &mut found[..n]);
         for (&i, h) in of[..n].iter().zip(found) {
             hits[i as usize] = h;
         }
@@ -127,20 +127,14 @@ impl SceneRef<'_> {
     ) -> ObjectScatter {
         let objects = self.objects.expect("object hits come from the objects");
         c.object_hits += 1;
-        let sp = surface_point(objects.accel.mesh(), hit);
+        let sp = surface_point_on(objects.triangle(hit.prim), hit);
         let d = Vec3::from(ray.dir);
         // the side the ray came from (both sides of an object's triangle are its surface; a
         // glass mesh is wound outward, so its ray comes from outside where it meets the
-        // winding's normal head on; `sp.ng` is turned up, as the sea's)
-        let [p0, p1, p2] = objects.accel.mesh().triangle(hit.prim).map(Vec3::from);
-        let outward = if (p1 - p0).cross(p2 - p0).dot(sp.ng) < 0.0 {
-            -sp.ng
-        } else {
-            sp.ng
-        };
-        let from_outside = d.dot(outward) < 0.0;
-        let n = if from_outside { outward } else { -outward };
-        let albedo = objects.albedo_of[hit.prim as usize];
+        // winding's normal, `sp.ng`, head on)
+        let from_outside = d.dot(sp.ng) < 0.0;
+        let n = if from_outside { sp.ng } else { -sp.ng };
+        let albedo = objects.albedo(hit.prim);
         let object = objects.object(hit.prim);
         let surface = match object.material {
             Material::Diffuse => Surface::Diffuse,

@@ -479,7 +479,7 @@ impl Prepared {
         let (h, aovs) = (cfg.camera.height_m as f32, &cfg.render.aovs);
         let aovs = (self.pool).install(|| scene_ref.aov_layers(&camera, h, aovs, &settings));
         let seconds_trace = t.elapsed().as_secs_f64();
-        let objects_error = (self.objects.as_ref()).and_then(|o| o.accel.take_error());
+        let objects_error = (self.objects.as_ref()).and_then(|o| o.take_error());
         if let Some(message) = self.accel.take_error().or(objects_error) {
             return Err(RenderError::Trace {
                 backend: self.accel.name(),
@@ -496,6 +496,7 @@ impl Prepared {
         let warnings = warnings(folded_fraction, c.escaped_below_horizon);
         let mesh = self.accel.mesh();
         let seconds_build = self.seconds_build;
+        let seconds_objects = (self.objects.as_ref()).map_or(0.0, |o| o.build_seconds);
         let report = RenderReport {
             width: camera.width,
             height: camera.height,
@@ -512,12 +513,14 @@ impl Prepared {
             seconds_ocean: self.seconds_ocean,
             seconds_tessellation: self.seconds_tessellation,
             seconds_build,
+            seconds_objects,
             seconds_trace,
             seconds_normal_map,
             normal_map_share: seconds_normal_map / seconds_trace.max(1e-12),
             seconds_total: self.seconds_ocean
                 + self.seconds_tessellation
                 + seconds_build
+                + seconds_objects
                 + seconds_trace,
             png_exposure_stops: None,
             rays: c.rays,

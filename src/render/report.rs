@@ -41,6 +41,9 @@ pub struct RenderReport {
     pub seconds_ocean: f64,
     pub seconds_tessellation: f64,
     pub seconds_build: f64,
+    /// Reading, placing and building the objects (0 without any).
+    #[serde(default)]
+    pub seconds_objects: f64,
     pub seconds_trace: f64,
     /// Wall-clock seconds the mapped normals add to the trace, estimated from single and
     /// paired timed batches (`Counters::normal_map_thread_seconds`; thread-seconds divided by the thread

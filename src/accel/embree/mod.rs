@@ -12,11 +12,13 @@
 
 mod describe;
 mod device;
+mod instances;
 mod scene;
 mod user;
 
 pub use describe::{EmbreeInfo, describe, versions};
 pub use device::{Device, flush_denormals_on_this_thread};
+pub use instances::Instances;
 pub use scene::Scene;
 pub use user::ExactScene;
 

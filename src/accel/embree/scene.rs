@@ -200,6 +200,11 @@ impl Scene {
 }
 
 impl Scene {
+    /// The committed scene's handle (for an instance that places it).
+    pub(super) fn raw(&self) -> NonNull<c_void> {
+        self.raw
+    }
+
     /// Whether `ray` may be handed to Embree; counts the ones that may not.
     #[inline]
     fn admit(&self, ray: &Ray) -> bool {
