@@ -153,3 +153,35 @@ pub fn interrupt(child: &std::process::Child) -> bool {
         .unwrap()
         .success()
 }
+
+/// A square pinhole image `width` pixels wide looking straight down from `height_m` through a
+/// field of view of `hfov_deg`, at `spp` samples per pixel, over the default sea.
+pub fn looking_down(
+    height_m: f64,
+    hfov_deg: f64,
+    width: usize,
+    spp: u32,
+) -> vastocean::config::SceneConfig {
+    let mut cfg = vastocean::config::SceneConfig::default();
+    cfg.camera.height_m = height_m;
+    cfg.camera.width = width;
+    cfg.camera.aspect = 1.0;
+    cfg.camera.projection = vastocean::config::Projection::Pinhole {
+        hfov_deg,
+        yaw_deg: 0.0,
+        pitch_deg: -90.0,
+        roll_deg: 0.0,
+    };
+    cfg.render.spp = spp;
+    cfg
+}
+
+/// A render's mean pixel luminance and its standard error (from the film's per-pixel
+/// variances of the mean).
+pub fn mean_luminance_se(r: &vastocean::render::pipeline::Rendered) -> (f64, f64) {
+    let lum = |c: [f32; 3]| vastocean::color::luminance(c) as f64;
+    let n = r.film.image.pixels.len() as f64;
+    let mean = r.film.image.pixels.iter().map(|&c| lum(c)).sum::<f64>() / n;
+    let se = (r.film.var_y.iter().map(|&v| v as f64).sum::<f64>()).sqrt() / n;
+    (mean, se)
+}

@@ -2,11 +2,12 @@
 //! below it by the Fresnel equations' transmission, with its internal reflections summed; a
 //! mesh wound inward is noticed.
 
-use vastocean::config::{AnalyticSky, Material, ObjectConfig, Projection, SceneConfig};
+use vastocean::config::{AnalyticSky, Material, ObjectConfig};
 use vastocean::render::pipeline::prepare;
 
-/// A closed box 2a wide and 2t thick about the origin, faces wound outward, as OBJ text.
-fn slab_obj(a: f64, t: f64) -> String {
+/// A closed box 2a wide and 2t thick about the origin, faces wound outward (or, `inward`,
+/// the other way), as OBJ text.
+fn slab_obj(a: f64, t: f64, inward: bool) -> String {
     let mut s = String::new();
     for (x, y, z) in [
         (-a, -t, -a),
@@ -24,25 +25,22 @@ fn slab_obj(a: f64, t: f64) -> String {
         "5 8 7", "5 7 6", "1 2 3", "1 3 4", "1 5 6", "1 6 2", "4 3 7", "4 7 8", "1 4 8", "1 8 5",
         "2 6 7", "2 7 3",
     ] {
-        s += &format!("f {f}\n");
+        let f: Vec<&str> = f.split(' ').collect();
+        let f = if inward {
+            [f[0], f[2], f[1]]
+        } else {
+            [f[0], f[1], f[2]]
+        };
+        s += &format!("f {}\n", f.join(" "));
     }
     s
 }
 
 /// A pinhole 260 m up looking straight down through a 20 m wide, 1 m thick slab held 200 m
-/// up (or not), under a uniform sky of 1: (mean luminance, its standard error).
-fn through_slab(slab: Option<&std::path::Path>, ior: f64) -> (f64, f64) {
-    let mut cfg = SceneConfig::default();
-    cfg.camera.height_m = 260.0;
-    cfg.camera.width = 48;
-    cfg.camera.aspect = 1.0;
-    cfg.camera.projection = Projection::Pinhole {
-        hfov_deg: 2.0,
-        yaw_deg: 0.0,
-        pitch_deg: -90.0,
-        roll_deg: 0.0,
-    };
-    cfg.render.spp = 256;
+/// up (or not), under a uniform sky of 1: (mean luminance, its standard error, the render's
+/// warnings).
+fn through_slab(slab: Option<&std::path::Path>, ior: f64) -> (f64, f64, Vec<String>) {
+    let mut cfg = crate::common::looking_down(260.0, 2.0, 48, 256);
     cfg.sky.analytic = AnalyticSky::Uniform { radiance: [1.0; 3] };
     if let Some(mesh) = slab {
         cfg.objects = vec![ObjectConfig {
@@ -57,12 +55,9 @@ fn through_slab(slab: Option<&std::path::Path>, ior: f64) -> (f64, f64) {
         }];
     }
     let r = prepare(&cfg).unwrap().render(&cfg, false).unwrap();
-    let lum = |c: [f32; 3]| vastocean::color::luminance(c) as f64;
-    let n = r.film.image.pixels.len() as f64;
-    let mean = r.film.image.pixels.iter().map(|&c| lum(c)).sum::<f64>() / n;
-    let se = (r.film.var_y.iter().map(|&v| v as f64).sum::<f64>()).sqrt() / n;
     assert_eq!(r.report.nan_count, 0);
-    (mean, se)
+    let (mean, se) = crate::common::mean_luminance_se(&r);
+    (mean, se, r.report.warnings)
 }
 
 /// Through a clear slab at normal incidence the sea is seen with the slab's transmission
@@ -74,10 +69,11 @@ fn a_glass_slab_passes_the_sea_by_the_fresnel_equations() {
     let dir = std::env::temp_dir().join(format!("vastocean-glass-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let mesh = dir.join("slab.obj");
-    std::fs::write(&mesh, slab_obj(10.0, 0.5)).unwrap();
-    let (sea, sea_se) = through_slab(None, 1.5);
+    std::fs::write(&mesh, slab_obj(10.0, 0.5, false)).unwrap();
+    let (sea, sea_se, _) = through_slab(None, 1.5);
     for ior in [1.5, 2.4] {
-        let (glass, glass_se) = through_slab(Some(&mesh), ior);
+        let (glass, glass_se, warnings) = through_slab(Some(&mesh), ior);
+        assert!(warnings.is_empty(), "{warnings:?}");
         let r = ((ior - 1.0) / (ior + 1.0)).powi(2);
         let t = (1.0 - r) / (1.0 + r);
         let expected = t * sea + (1.0 - t);
@@ -92,10 +88,19 @@ fn a_glass_slab_passes_the_sea_by_the_fresnel_equations() {
             "the slab is seen: {glass} {sea}"
         );
     }
-    let (air, air_se) = through_slab(Some(&mesh), 1.0);
+    let (air, air_se, _) = through_slab(Some(&mesh), 1.0);
     assert!(
         (air - sea).abs() < 4.0 * (air_se.powi(2) + sea_se.powi(2)).sqrt() + 1e-4,
         "a slab of n = 1 is not there: {air} against {sea}"
+    );
+    // wound inward, rays that think they left it travel on inside it and out of its far side
+    // flagged as inside: they meet nothing, are counted, and the render says why
+    let inward = dir.join("inward.obj");
+    std::fs::write(&inward, slab_obj(10.0, 0.5, true)).unwrap();
+    let (_, _, warnings) = through_slab(Some(&inward), 1.5);
+    assert!(
+        warnings.iter().any(|w| w.contains("wound outward")),
+        "{warnings:?}"
     );
     std::fs::remove_dir_all(&dir).ok();
 }

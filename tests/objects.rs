@@ -62,6 +62,28 @@ fn the_ships_are_hit_alike_by_every_backend_and_the_oracle() {
     assert_eq!(backends[0].instances.len(), 3);
     let mesh = backends[0].scene_mesh();
     assert_eq!(mesh.triangle_count(), 3 * 1836);
+    // the instances' f32 placement is the objects' poses evaluated vertex by vertex in f64
+    let p = prepare(&cfg).unwrap();
+    let sampler = p.ocean.sampler(cfg.camera.position_m);
+    let mut first = 0;
+    for o in &cfg.objects {
+        let local = vastocean::objects::LocalMesh::of(o).unwrap();
+        let pose = vastocean::objects::Pose::of(o, &local, &sampler, o.position_m);
+        for (v, q) in local.positions.iter().enumerate() {
+            let d = pose.place(glam::DVec3::from(*q) * o.scale).to_array();
+            let w = vastocean::lod::curved_frame_position(
+                o.position_m[0],
+                o.position_m[1],
+                d,
+                p.lod.earth_radius_m,
+            );
+            let got = mesh.positions()[first + v];
+            for i in 0..3 {
+                assert!((got[i] as f64 - w[i]).abs() < 1e-4, "{got:?} against {w:?}");
+            }
+        }
+        first += local.positions.len();
+    }
     let oracle = BruteForce::new(mesh.clone());
     let mut rng = Rng::keyed(&[35, 1]);
     let rays: Vec<Ray> = (0..6000)
@@ -168,17 +190,7 @@ fn a_floating_ship_sits_at_its_draft_on_a_calm_sea_and_on_the_waves_on_a_rough_o
 #[test]
 fn a_deck_under_the_open_sky_reflects_its_irradiance() {
     let albedo = 0.6;
-    let mut cfg = SceneConfig::default();
-    cfg.camera.height_m = 80.0;
-    cfg.camera.width = 48;
-    cfg.camera.aspect = 1.0;
-    cfg.camera.projection = Projection::Pinhole {
-        hfov_deg: 6.0,
-        yaw_deg: 0.0,
-        pitch_deg: -90.0,
-        roll_deg: 0.0,
-    };
-    cfg.render.spp = 64;
+    let mut cfg = crate::common::looking_down(80.0, 6.0, 48, 64);
     cfg.objects = vec![ObjectConfig {
         float: false,
         height_m: 50.0,
@@ -216,10 +228,7 @@ fn a_deck_under_the_open_sky_reflects_its_irradiance() {
         .map(|(_, w)| w.x as f64)
         .sum::<f64>()
         / n as f64;
-    let lum = |c: [f32; 3]| vastocean::color::luminance(c) as f64;
-    let count = r.film.image.pixels.len() as f64;
-    let mean = r.film.image.pixels.iter().map(|&c| lum(c)).sum::<f64>() / count;
-    let se = (r.film.var_y.iter().map(|&v| v as f64).sum::<f64>()).sqrt() / count;
+    let (mean, se) = crate::common::mean_luminance_se(&r);
     assert!(
         (mean - expected).abs() < 4.0 * se + 0.002,
         "metal deck {mean:.5} +- {se:.5}, directional albedo {expected:.5}"
@@ -236,10 +245,8 @@ fn a_deck_under_the_open_sky_reflects_its_irradiance() {
     let irradiance = p.sky.irradiance();
     assert!(p.sky.sun_light().is_some(), "the default sky has a sun");
     let r = p.render(&sunny, false).unwrap();
+    let (mean, se) = crate::common::mean_luminance_se(&r);
     let lum = |c: [f32; 3]| vastocean::color::luminance(c) as f64;
-    let n = r.film.image.pixels.len() as f64;
-    let mean = r.film.image.pixels.iter().map(|&c| lum(c)).sum::<f64>() / n;
-    let se = (r.film.var_y.iter().map(|&v| v as f64).sum::<f64>()).sqrt() / n;
     let expected = albedo * lum(irradiance.to_array()) / std::f64::consts::PI;
     assert!(
         (mean - expected).abs() < 4.0 * se + 0.005 * expected,
@@ -405,6 +412,12 @@ fn bad_objects_and_layers_in_passes_are_refused_with_their_reasons() {
         ("mesh = \"missing.obj\"", "missing.obj"),
         ("albedo = [1.5, 0.5, 0.5]", "object[0].albedo"),
         ("ship = { beam_m = 50.0 }", "object[0].ship.beam_m"),
+        ("material = \"glass\"", "object[0].material"),
+        ("name = \"a\"\n[[object]]\nname = \"a\"", "object[1].name"),
+        (
+            "material = \"glass\"\nior = 0.5\nship = { deckhouse_m = 0.0 }",
+            "object[0].ior",
+        ),
     ] {
         std::fs::write(&scene, format!("[[object]]\n{object}\n")).unwrap();
         let s = scene.to_string_lossy().to_string();

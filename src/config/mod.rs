@@ -273,6 +273,14 @@ impl SceneConfig {
         self.sky.validate()?;
         for (i, o) in self.objects.iter().enumerate() {
             o.validate(&format!("object[{i}]"))?;
+            let name = o.display_name(i);
+            if let Some(j) = (0..i).find(|&j| self.objects[j].display_name(j) == name) {
+                return Err(invalid(
+                    &format!("object[{i}].name"),
+                    &format!("a name no other object has (object[{j}] is called that too)"),
+                    &name,
+                ));
+            }
         }
         if let Some(m) = &self.camera.mount {
             let names: Vec<String> = (self.objects.iter().enumerate())

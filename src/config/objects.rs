@@ -186,6 +186,17 @@ impl ObjectConfig {
                 self.roughness,
             ));
         }
+        if self.material == Material::Glass
+            && self.is_built_in_ship()
+            && self.ship.deckhouse_m > 0.0
+        {
+            return Err(invalid(
+                &field("material"),
+                "a closed surface for glass: the built-in ship's deckhouse is a box of its own \
+                 standing on the deck (set ship.deckhouse_m = 0)",
+                "glass",
+            ));
+        }
         if !(self.ior >= 1.0 && self.ior <= 4.0) {
             return Err(invalid(&field("ior"), "in [1, 4]", self.ior));
         }

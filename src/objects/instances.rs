@@ -64,6 +64,9 @@ pub struct Instance {
     /// Its bounds in the scene, a hair wider.
     pub lo: Vec3,
     pub hi: Vec3,
+    /// Its translation's length plus its prototype's largest coordinate, m: the size of the
+    /// numbers a hit on it is computed from, in either frame.
+    pub error_scale: f32,
 }
 
 impl Instance {
@@ -77,6 +80,9 @@ impl Instance {
             },
         );
         let pad = 1e-3 + 1e-6 * lo.abs().max(hi.abs()).max_element();
+        let extent = (mesh.positions().iter())
+            .map(|p| Vec3::from(*p).abs().max_element())
+            .fold(0.0f32, f32::max);
         Instance {
             prototype,
             base,
@@ -84,6 +90,7 @@ impl Instance {
             to_local: to_scene.inverse(),
             lo: lo - pad,
             hi: hi + pad,
+            error_scale: Vec3::from(to_scene.translation).length() + extent,
         }
     }
 

@@ -303,6 +303,12 @@ impl SceneObjects {
         proto.part_albedo[t as usize].unwrap_or(self.placed[k].albedo)
     }
 
+    /// The size of the coordinates a hit on triangle `prim` is computed from (see
+    /// [`Instance::error_scale`]).
+    pub fn error_scale(&self, prim: u32) -> f32 {
+        self.instances[self.locate(prim).0].error_scale
+    }
+
     /// A triangle's corners in the scene.
     pub fn triangle(&self, prim: u32) -> [Vec3; 3] {
         let (k, t) = self.locate(prim);

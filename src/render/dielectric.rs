@@ -15,20 +15,13 @@
 use glam::Vec3;
 
 use super::ggx::Ggx;
+use super::water::fresnel;
 
 /// The Fresnel reflectance of an unpolarised wave meeting a dielectric interface at cosine
 /// `cos_i` (> 0) from the side with relative index `eta` (transmitted side over incident):
-/// 1 past total internal reflection.
+/// 1 past total internal reflection (the sea's own [`fresnel`]).
 pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
-    let cos_i = cos_i.clamp(0.0, 1.0);
-    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return 1.0;
-    }
-    let cos_t = (1.0 - sin2_t).sqrt();
-    let r_parl = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    let r_perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    0.5 * (r_parl * r_parl + r_perp * r_perp)
+    fresnel(cos_i, 1.0, eta)
 }
 
 /// `wo` refracted through a microfacet of normal `m` (wo.m > 0) into a medium of relative

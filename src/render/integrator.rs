@@ -438,7 +438,16 @@ impl SceneRef<'_> {
             let rng = &mut rngs[e.sample as usize];
             *o = (
                 k,
-                self.scatter_object(&e.ray, &hit, e.in_water, width, settings, rng, c),
+                self.scatter_object(
+                    &e.ray,
+                    &hit,
+                    e.in_water,
+                    e.in_object,
+                    width,
+                    settings,
+                    rng,
+                    c,
+                ),
             );
         }
         let objects = &objects[..n_object];

@@ -24,17 +24,18 @@ pub(super) struct SurfacePoint {
 
 /// The point of `hit` on an object's triangle `tri` (corners in the scene, placed by its
 /// instance's transform in f32), its geometric normal the winding's (v1 - v0) x (v2 - v0):
-/// outward on a mesh wound outward.
-pub(super) fn surface_point_on(tri: [Vec3; 3], hit: &Hit) -> SurfacePoint {
+/// outward on a mesh wound outward. `scale`: the size of the coordinates the backend
+/// intersected in (its instance's translation plus its prototype's extent).
+pub(super) fn surface_point_on(tri: [Vec3; 3], hit: &Hit, scale: f32) -> SurfacePoint {
     let [p0, p1, p2] = tri;
     let (b1, b2) = (hit.u, hit.v);
     let b0 = 1.0 - b1 - b2;
     let p = b0 * p0 + b1 * p1 + b2 * p2;
-    // As for the sea's, plus the corners' own rounding by the transform (a few ulps of the
-    // larger of the point and the prototype's extent, bounded by their sum).
-    let extent = (p1 - p0).abs().max((p2 - p0).abs()).max_element();
+    // As for the sea's, plus the rounding of the transform between the prototype's frame, in
+    // which the backend intersects, and the scene's: a few ulps of the larger coordinates of
+    // either (the point's, or the translation's and the prototype's).
     let err = fp::barycentric_error([b0, b1, b2], [p0, p1, p2])
-        + Vec3::splat(fp::gamma(8.0) * (p.abs().max_element() + extent));
+        + Vec3::splat(fp::gamma(8.0) * (p.abs().max_element() + scale));
     let ng = (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Y);
     SurfacePoint {
         p,

@@ -110,7 +110,8 @@ impl SceneRef<'_> {
         }
     }
 
-    /// Shading at an object hit of `ray` (travelling in the water when `in_water`): in the air
+    /// Shading at an object hit of `ray` (travelling in the water when `in_water`, inside glass
+    /// when `in_object`, which an opaque object's bounce keeps): in the air
     /// the sun sampled (two numbers, drawn first), then the bounce: cosine-weighted for a
     /// diffuse object, by GGX's visible normals for a metal one (two numbers), and for glass
     /// reflected or refracted by the microfacet's Fresnel (three).
@@ -120,6 +121,7 @@ impl SceneRef<'_> {
         ray: &Ray,
         hit: &Hit,
         in_water: bool,
+        in_object: bool,
         width_m: f32,
         settings: &TraceSettings,
         rng: &mut Rng,
@@ -127,12 +129,17 @@ impl SceneRef<'_> {
     ) -> ObjectScatter {
         let objects = self.objects.expect("object hits come from the objects");
         c.object_hits += 1;
-        let sp = surface_point_on(objects.triangle(hit.prim), hit);
+        let sp = surface_point_on(
+            objects.triangle(hit.prim),
+            hit,
+            objects.error_scale(hit.prim),
+        );
         let d = Vec3::from(ray.dir);
         // the side the ray came from (both sides of an object's triangle are its surface; a
         // glass mesh is wound outward, so its ray comes from outside where it meets the
         // winding's normal, `sp.ng`, head on)
-        let from_outside = d.dot(sp.ng) < 0.0;
+        // (edge-on, or NaN, counts as outside, as the side an opaque object was shaded on)
+        let from_outside = d.dot(sp.ng).partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater);
         let n = if from_outside { sp.ng } else { -sp.ng };
         let albedo = objects.albedo(hit.prim);
         let object = objects.object(hit.prim);
@@ -206,11 +213,11 @@ impl SceneRef<'_> {
         let (bounce, weight) = match &surface {
             Surface::Diffuse => {
                 let (w, cos) = cosine_direction(&frame, rng.f32(), rng.f32());
-                (Some((w, cos * FRAC_1_PI, in_water, false)), albedo)
+                (Some((w, cos * FRAC_1_PI, in_water, in_object)), albedo)
             }
             Surface::Metal(g) => match g.sample(wo, rng.f32(), rng.f32()) {
                 Some((wi, weight)) => (
-                    Some((frame.from_local(wi), g.pdf(wo, wi), in_water, false)),
+                    Some((frame.from_local(wi), g.pdf(wo, wi), in_water, in_object)),
                     weight,
                 ),
                 // it leaves below the surface: masked, its light lost

@@ -413,7 +413,12 @@ impl Prepared {
         cfg.validate()?;
         let placed;
         let cfg = match (&cfg.camera.mount, &self.mounted) {
-            (None, _) => cfg,
+            (None, None) => cfg,
+            (None, Some(_)) => {
+                return Err(RenderError::SharedOcean(
+                    "was prepared around a mounted camera; this scene's camera is free",
+                ));
+            }
             (Some(_), Some(camera)) => {
                 placed = SceneConfig {
                     camera: crate::config::CameraConfig {
@@ -493,7 +498,14 @@ impl Prepared {
             .ocean
             .spectrum()
             .map_or_else(Vec::new, |s| s.range_notes());
-        let warnings = warnings(folded_fraction, c.escaped_below_horizon);
+        let mut warnings = warnings(folded_fraction, c.escaped_below_horizon);
+        if c.object_leaks > 0 {
+            warnings.push(format!(
+                "{} rays inside glass objects met none of their surface: a glass mesh must be \
+                 closed and wound outward (counter-clockwise seen from outside)",
+                c.object_leaks
+            ));
+        }
         let mesh = self.accel.mesh();
         let seconds_build = self.seconds_build;
         let seconds_objects = (self.objects.as_ref()).map_or(0.0, |o| o.build_seconds);

@@ -117,7 +117,8 @@ impl Prepared {
         let prepared = prepare_with(
             &at,
             Setup {
-                refittable: true,
+                // (each frame is built anew: nothing is refitted)
+                refittable: false,
                 progress: false,
                 ocean: Some(ocean),
                 sky: Some(sky),

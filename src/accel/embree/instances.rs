@@ -4,7 +4,6 @@
 use std::ffi::c_void;
 use std::ptr::NonNull;
 use std::sync::Arc;
-use std::time::Instant;
 
 use super::scene::new_scene;
 use super::{BuildOptions, Device, EmbreeError, Scene, error_name, ffi};
@@ -14,9 +13,8 @@ use crate::accel::{Hit, Ray};
 pub struct Instances {
     raw: NonNull<c_void>,
     /// The scenes the instances place (kept alive as long as the top-level scene).
-    children: Vec<Scene>,
+    _children: Vec<Scene>,
     device: Arc<Device>,
-    build_seconds: f64,
 }
 
 // SAFETY: as for `Scene`: a committed scene is only read, which Embree allows from any number
@@ -64,24 +62,16 @@ impl Instances {
                 }));
             }
         }
-        let start = Instant::now();
         // SAFETY: scene is live and complete.
         unsafe { ffi::vo_scene_commit(scene.as_ptr()) };
-        let build_seconds = start.elapsed().as_secs_f64();
         device
             .check("rtcCommitScene (instances)")
             .map_err(release)?;
         Ok(Instances {
             raw: scene,
-            children,
+            _children: children,
             device: device.clone(),
-            build_seconds,
         })
-    }
-
-    /// Seconds the top-level build took (the children's are their own).
-    pub fn build_seconds(&self) -> f64 {
-        self.build_seconds + self.children.iter().map(Scene::build_seconds).sum::<f64>()
     }
 
     /// The closest hit of each ray, with the instance it lies in; rays with a NaN or infinite

@@ -339,7 +339,8 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
         Extra::Furnace,
     );
     // A white Lambertian ship floating in view, a white metal one held just above the sea
-    // beside the camera, and a clear glass one floating half under the water: light between the sea and the objects may bounce many times,
+    // beside the camera, and a clear glass hull (no deckhouse) floating half under the
+    // water: light between the sea and the objects may bounce many times,
     // and still no pixel may exceed the sky's 1.
     add(
         "furnace-objects",
@@ -371,6 +372,10 @@ pub fn matrix(base: &SceneConfig, full: bool) -> Vec<Cell> {
                     material: crate::config::Material::Glass,
                     albedo: white,
                     roughness: 0.05,
+                    ship: crate::config::ShipConfig {
+                        deckhouse_m: 0.0,
+                        ..Default::default()
+                    },
                     ..Default::default()
                 },
             ];
