@@ -315,44 +315,6 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
     })
 }
 
-/// [`prepare_with`] for a scene whose camera an object carries: the ocean first, then the
-/// camera on the object's pose at the ocean's time, then the scene around it.
-fn prepare_mounted(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderError> {
-    cfg.validate()?;
-    let (ocean, seconds_ocean) = match setup.ocean {
-        Some(ocean) => (ocean, 0.0),
-        None => tracing_pool(cfg.render.threads)?.install(|| build_ocean(cfg, setup.progress))?,
-    };
-    let mut placed = cfg.clone();
-    placed.camera = crate::objects::mount::mounted_camera(&cfg.camera, &cfg.objects, &ocean)?;
-    let surface_m = surface_height_at_nadir(&ocean.sampler(placed.camera.position_m));
-    if placed.camera.height_m <= surface_m {
-        return Err(RenderError::CameraUnderwater {
-            camera_m: placed.camera.height_m,
-            surface_m,
-        });
-    }
-    // a sky handed in was built for the free camera's height, which its dome's parallax uses
-    let sky = setup.sky.and_then(|mut sky| {
-        let h = placed.camera.height_m;
-        if let Some(own) = Arc::get_mut(&mut sky) {
-            own.camera_height_m = h;
-        }
-        (sky.camera_height_m == h).then_some(sky)
-    });
-    let mut prepared = prepare_with(
-        &placed,
-        Setup {
-            ocean: Some(ocean),
-            sky,
-            ..setup
-        },
-    )?;
-    prepared.seconds_ocean += seconds_ocean;
-    prepared.mounted = Some(placed.camera);
-    Ok(prepared)
-}
-
 /// Deepest trough counted on, in RMS heights: a Gaussian sea goes below -5 sigma at about one
 /// point in 3.5 million.
 const TROUGH_SIGMAS: f64 = 5.0;
@@ -411,31 +373,8 @@ impl Prepared {
         progress: bool,
     ) -> Result<(Rendered, Vec<PixelState>), RenderError> {
         cfg.validate()?;
-        let placed;
-        let cfg = match (&cfg.camera.mount, &self.mounted) {
-            (None, None) => cfg,
-            (None, Some(_)) => {
-                return Err(RenderError::SharedOcean(
-                    "was prepared around a mounted camera; this scene's camera is free",
-                ));
-            }
-            (Some(_), Some(camera)) => {
-                placed = SceneConfig {
-                    camera: crate::config::CameraConfig {
-                        width: cfg.camera.width,
-                        aspect: cfg.camera.aspect,
-                        ..camera.clone()
-                    },
-                    ..cfg.clone()
-                };
-                &placed
-            }
-            (Some(_), None) => {
-                return Err(RenderError::SharedOcean(
-                    "was prepared for a free camera; this scene's camera is mounted",
-                ));
-            }
-        };
+        let placed = self.placed_config(cfg)?;
+        let cfg = placed.as_ref();
         let camera = Camera::new(cfg.camera.aimed(), cfg.camera.width, cfg.camera.aspect);
         let sampler = self.ocean.sampler(self.camera_position_m);
         let filtered = cfg.render.normals == crate::config::NormalMode::Filtered;
@@ -596,7 +535,10 @@ pub fn render_scene(cfg: &SceneConfig, progress: bool) -> Result<Rendered, Rende
 
 #[path = "pipeline_frames.rs"]
 mod frames;
+#[path = "pipeline_mount.rs"]
+mod mount;
 pub use frames::FrameUpdate;
+use mount::prepare_mounted;
 
 #[cfg(test)]
 #[path = "pipeline_tests.rs"]
