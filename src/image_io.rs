@@ -476,8 +476,9 @@ pub fn stage_json(path: &Path, value: &impl serde::Serialize) -> Result<Staged, 
     })?)
 }
 
-/// Writes a linear-RGB EXR with half-float (f16) channels R, G, B and PIZ compression, the
-/// compact form for shipped sky maps. Values beyond half's range (65504) are refused rather than
+/// Writes a linear-RGB EXR with half-float (f16) channels R, G, B and ZIP compression, the
+/// compact form for shipped sky maps (on the shipped maps 0.6 of PIZ's bytes, and read in
+/// half its time: docs/performance.md, "Output"). Values beyond half's range (65504) are refused rather than
 /// written as infinity.
 pub fn write_exr_half(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
     use exr::prelude::*;
@@ -511,7 +512,7 @@ pub fn write_exr_half(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
         Encoding::SMALL_LOSSLESS,
         channels,
     );
-    layer.encoding.compression = Compression::PIZ;
+    layer.encoding.compression = Compression::ZIP16;
     let image = Image::from_layer(layer);
     Ok(write_atomically(path, |w| {
         image

@@ -40,10 +40,11 @@ pub fn validate_map(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
             img.width, img.height
         )));
     }
+    use rayon::prelude::*;
     if let Some(i) = img
         .pixels
-        .iter()
-        .position(|p| p.iter().any(|c| !c.is_finite() || *c < 0.0))
+        .par_iter()
+        .position_first(|p| p.iter().any(|c| !c.is_finite() || *c < 0.0))
     {
         return Err(invalid(format!(
             "texel ({}, {}) is {:?}: sky radiance must be finite and >= 0",
