@@ -213,6 +213,11 @@ impl BandCells {
         }
     }
 
+    /// The grid indices outside the reach: one run between the two ends of the grid.
+    pub fn outside(&self) -> std::ops::Range<usize> {
+        self.reach..self.n - self.reach + 1
+    }
+
     /// The grid indices within the reach, ascending.
     pub fn grid_indices(&self) -> impl Iterator<Item = usize> + use<> {
         let (reach, n) = (self.reach, self.n);
