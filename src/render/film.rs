@@ -297,6 +297,9 @@ pub fn render_image_samples(
     type Row = (Vec<PixelState>, Vec<[f32; 3]>, Vec<f32>, Vec<f32>, Counters);
     let rows: Vec<Row> = (0..h)
         .into_par_iter()
+        // one row per job: rows near the horizon and the sun cost many times the rest, and a
+        // leaf of many rows left for last kept one core idle at the end of the trace
+        .with_max_len(1)
         .map(|y| {
             let mut c = Counters::default();
             let row = (0..w)
