@@ -248,7 +248,10 @@ fn bench_accuracy_writes_its_files_and_a_configuration_matches_itself() {
     let job = AccuracyJob {
         scene,
         width: 64,
-        tessellations: vec![Tessellation::preset(LodChoice::PaperLow)],
+        tessellations: vec![
+            Tessellation::preset(LodChoice::PaperLow),
+            Tessellation::near(1.8),
+        ],
         spp: vec![8, 32],
         normals: vec![NormalMode::Mapped, NormalMode::Vertex, NormalMode::Filtered],
         reference: Tessellation::preset(LodChoice::PaperLow),
@@ -261,14 +264,23 @@ fn bench_accuracy_writes_its_files_and_a_configuration_matches_itself() {
     let r = app::bench::accuracy::run(&job).unwrap();
     assert_eq!(
         r.points.len(),
-        6,
-        "mapped, vertex and filtered, 8 and 32 spp"
+        12,
+        "two tessellations: mapped, vertex and filtered, 8 and 32 spp"
     );
     assert!(
-        r.points[4..]
+        r.points[4..6]
             .iter()
             .all(|p| p.normals == NormalMode::Filtered)
     );
+    // One ocean for every tessellation, its build counted in each point as a render of its
+    // own would count it.
+    let ocean = r.points[0].seconds_ocean;
+    assert!(ocean > 0.0);
+    for p in &r.points {
+        assert_eq!(p.seconds_ocean, ocean, "{p:?}");
+        let own = p.seconds_ocean + p.seconds_tessellation + p.seconds_build + p.seconds_trace;
+        assert!((p.seconds_total - own).abs() < 1e-9, "{p:?}");
+    }
     // The mapped points are the reference's configuration with fewer samples: no bias to
     // resolve, and their error, noise included, is their noise (at 32 spp, four samples a
     // batch on a low-discrepancy pattern: a noise taken from the samples' variance, as if they

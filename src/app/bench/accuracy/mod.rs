@@ -31,7 +31,7 @@ use crate::app::compare::sampling;
 use crate::config::{LodChoice, LodConfig, NormalMode, Projection, SceneConfig};
 use crate::render::Camera;
 use crate::render::film::MAX_BATCHES;
-use crate::render::pipeline::prepare;
+use crate::render::pipeline::prepare_with;
 
 /// A tessellation of the sweep.
 #[derive(Clone, Debug, Serialize)]
@@ -330,11 +330,13 @@ pub fn run(job: &AccuracyJob) -> Result<AccuracyReport, AppError> {
     );
     let ref_cfg = reference_scene(job);
     let band = Camera::new(ref_cfg.camera.projection, job.width, 2.0);
-    let mut points = render_points(job, &band, &progress)?;
+    let (mut points, shared) = render_points(job, &band, &progress)?;
 
     // The reference: quadrupled until its noise is at most the share of the smallest error.
-    let p = prepare(&ref_cfg)?;
-    let (mut spp, mut tried, mut seconds) = (job.reference_spp, Vec::new(), p.seconds_ocean);
+    let p = prepare_with(&ref_cfg, sweep::Shared::setup(Some(&shared)))?;
+    let seconds_ocean = shared.seconds_ocean;
+    drop(shared);
+    let (mut spp, mut tried, mut seconds) = (job.reference_spp, Vec::new(), seconds_ocean);
     seconds += p.seconds_tessellation + p.seconds_build;
     let (film, sampling, noise_band, smallest) = loop {
         let (film, sampling, s) = render_reference(&p, &ref_cfg, spp, job.reference_max_boost)?;

@@ -10,9 +10,12 @@ use crate::app::bench::Progress;
 use crate::app::compare::sampling;
 use crate::color::luminance;
 use crate::config::SceneConfig;
+use crate::ocean::Surface;
 use crate::render::Camera;
 use crate::render::film::{Film, MAX_BATCHES, Samples};
-use crate::render::pipeline::{Prepared, prepare};
+use crate::render::pipeline::{Prepared, Setup, prepare_with};
+use crate::sky::Sky;
+use std::sync::Arc;
 
 /// A point as rendered: its cost, and its film over the analysed band.
 pub(super) struct Rendered {
@@ -20,17 +23,21 @@ pub(super) struct Rendered {
     pub band: Film,
 }
 
-/// Renders every configuration, each tessellation prepared once; keeps each film's band.
+/// Renders every configuration, each tessellation prepared once, all of them on one ocean and
+/// one sky (built by the first); keeps each film's band. A point's time counts the ocean's
+/// build as a render of its own would.
 pub(super) fn render_points(
     job: &AccuracyJob,
     band: &Camera,
     progress: &Progress,
-) -> Result<Vec<Rendered>, AppError> {
+) -> Result<(Vec<Rendered>, Shared), AppError> {
     let mut out = Vec::new();
+    let mut shared: Option<Shared> = None;
     for t in &job.tessellations {
         let cfg = scene_with(job, t);
-        let p = prepare(&cfg)?;
-        let shared = p.seconds_ocean + p.seconds_tessellation + p.seconds_build;
+        let p = prepare_with(&cfg, Shared::setup(shared.as_ref()))?;
+        let first = shared.get_or_insert_with(|| Shared::of(&p));
+        let shared = first.seconds_ocean + p.seconds_tessellation + p.seconds_build;
         let structures = (p.ocean.bytes() + p.accel.mesh().bytes()) as u64 + p.accel.bytes();
         for &normals in &job.normals {
             for &spp in &job.spp {
@@ -49,7 +56,7 @@ pub(super) fn render_points(
                         normals,
                         spp,
                         triangles: rep.triangles,
-                        seconds_ocean: rep.seconds_ocean,
+                        seconds_ocean: first.seconds_ocean,
                         seconds_tessellation: rep.seconds_tessellation,
                         seconds_build: rep.seconds_build,
                         seconds_trace: rep.seconds_trace,
@@ -74,7 +81,34 @@ pub(super) fn render_points(
             }
         }
     }
-    Ok(out)
+    let shared = shared.ok_or_else(|| AppError::input("bench accuracy needs a tessellation"))?;
+    Ok((out, shared))
+}
+
+/// The ocean and sky every scene of the benchmark renders, and the seconds the ocean took.
+pub(super) struct Shared {
+    ocean: Arc<Surface>,
+    sky: Arc<Sky>,
+    pub seconds_ocean: f64,
+}
+
+impl Shared {
+    fn of(p: &Prepared) -> Shared {
+        Shared {
+            ocean: Arc::clone(&p.ocean),
+            sky: Arc::clone(&p.sky),
+            seconds_ocean: p.seconds_ocean,
+        }
+    }
+
+    /// A scene's set-up on these, or building its own when there are none yet.
+    pub(super) fn setup(shared: Option<&Shared>) -> Setup {
+        Setup {
+            ocean: shared.map(|s| Arc::clone(&s.ocean)),
+            sky: shared.map(|s| Arc::clone(&s.sky)),
+            ..Setup::default()
+        }
+    }
 }
 
 /// Per analysed row, the mean over its pixels of the variance of the pixel mean (from the
