@@ -369,6 +369,53 @@ fn exposure_scales_the_png_only() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
+/// `--exr-compression` (and `render.exr_compression` in a scene file) chooses how the EXR is
+/// stored, uncompressed by default; the pixels are the same bits whichever is chosen; a name
+/// that is none of them is refused naming the choices.
+#[test]
+fn exr_compression_stores_the_same_pixels() {
+    let dir = tmp("exr-compression");
+    let scene = dir.join("zip.toml");
+    std::fs::write(&scene, "[render]\nexr_compression = \"zip\"\n").unwrap();
+    let mut pixels = Vec::new();
+    for (name, args, stored) in [
+        (
+            "default",
+            vec![],
+            exr::compression::Compression::Uncompressed,
+        ),
+        (
+            "piz",
+            vec!["--exr-compression", "piz"],
+            exr::compression::Compression::PIZ,
+        ),
+        (
+            "file",
+            vec!["--config", scene.to_str().unwrap()],
+            exr::compression::Compression::ZIP16,
+        ),
+    ] {
+        let out = dir.join(name);
+        let render = ["render", "--width", "32", "--spp", "2", "--backend", "rust"];
+        let o = ["--out", out.to_str().unwrap()];
+        let (code, _, err) = vastocean(&[&render[..], &args[..], &o[..]].concat());
+        assert_eq!(code, 0, "{err}");
+        let exr = out.with_extension("exr");
+        let meta = exr::meta::MetaData::read_from_file(&exr, false).unwrap();
+        assert_eq!(meta.headers[0].compression, stored, "{name}");
+        let variance = vastocean::image_io::read_exr_channel(&exr, "Y.variance").unwrap();
+        pixels.push((vastocean::image_io::read_exr(&exr).unwrap(), variance));
+    }
+    assert!(pixels.windows(2).all(|p| p[0] == p[1]));
+    let (code, _, err) = vastocean(&["render", "--exr-compression", "lzw"]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("--exr-compression") && err.contains("piz"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
+
 #[test]
 fn truth_flags_that_would_do_nothing_are_refused() {
     let out = std::env::temp_dir().join("vastocean-truth-flags-refused");

@@ -270,7 +270,7 @@ pub fn run(job: &FramesJob) -> Result<SequenceReport, AppError> {
         let mut channels = vec![("Y.variance", &r.film.var_y[..])];
         channels.extend(r.aovs.channels());
         let staged = vec![
-            stage_exr_with(&exr, image, &channels)?,
+            stage_exr_with(&exr, image, &channels, cfg.render.exr_compression)?,
             stage_png(&png, image, exposure)?,
         ];
         commit_all(staged)?;

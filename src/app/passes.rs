@@ -160,6 +160,7 @@ fn check_same_render(passes: &[Pass]) -> Result<(), AppError> {
         c.render.threads = 0;
         // the PNG's exposure is merge's own (the passes write no PNG)
         c.render.exposure = None;
+        c.render.exr_compression = Default::default();
         c
     };
     let mut seen: Vec<(usize, &Path)> = Vec::new();
@@ -282,7 +283,12 @@ pub fn merge(job: &MergeJob) -> Result<RenderReport, AppError> {
     let (exposure, stops) = png_exposure(r.config.render.exposure, image);
     r.png_exposure_stops = Some(stops);
     let staged = vec![
-        stage_exr_with(&exr, image, &[("Y.variance", &film.var_y)])?,
+        stage_exr_with(
+            &exr,
+            image,
+            &[("Y.variance", &film.var_y)],
+            r.config.render.exr_compression,
+        )?,
         stage_png(&png, image, exposure)?,
         stage_json(&json, &r)?,
     ];

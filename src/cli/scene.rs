@@ -76,6 +76,10 @@ pub struct SceneFlags {
     /// spectrum's slopes; docs/ocean.md).
     #[arg(long, value_parser = choice::<vastocean::ocean::Interp>())]
     interp: Option<vastocean::ocean::Interp>,
+    /// How the EXR is stored, losslessly: none (the default, the fastest to write and read),
+    /// piz or zip (smaller; noisy renders shrink little: docs/performance.md, "Output").
+    #[arg(long, value_parser = choice::<vastocean::config::ExrCompression>())]
+    exr_compression: Option<vastocean::config::ExrCompression>,
 }
 
 impl SceneFlags {
@@ -108,6 +112,11 @@ impl SceneFlags {
             ),
             (self.threads.is_some(), "render.threads", "--threads"),
             (self.interp.is_some(), "ocean.interp", "--interp"),
+            (
+                self.exr_compression.is_some(),
+                "render.exr_compression",
+                "--exr-compression",
+            ),
         ];
         set.into_iter()
             .filter(|(given, ..)| *given)
@@ -171,6 +180,7 @@ impl SceneFlags {
         s.render.surface = self.surface.unwrap_or(s.render.surface);
         s.render.wrong_side = self.wrong_side.unwrap_or(s.render.wrong_side);
         s.ocean.interp = self.interp.unwrap_or(s.ocean.interp);
+        s.render.exr_compression = self.exr_compression.unwrap_or(s.render.exr_compression);
         Ok(s)
     }
 }

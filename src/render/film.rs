@@ -131,16 +131,28 @@ impl Film {
         if self.spp < 2 {
             return None;
         }
-        let w = self.image.width;
-        let (mut var, mut lum, mut n) = (0.0f64, 0.0f64, 0usize);
-        for (i, (&v, &p)) in self.var_y.iter().zip(&self.image.pixels).enumerate() {
-            let (x, y) = (i % w, i / w);
-            if camera.direction(x as f32 + 0.5, y as f32 + 0.5).y < 0.0 {
-                var += v as f64;
-                lum += crate::color::luminance(p) as f64;
-                n += 1;
-            }
-        }
+        let w = self.image.width.max(1);
+        // row sums side by side, added in row order (the same figure for any thread count)
+        let rows: Vec<(f64, f64, usize)> = self
+            .var_y
+            .par_chunks(w)
+            .zip(self.image.pixels.par_chunks(w))
+            .enumerate()
+            .map(|(y, (var_y, pixels))| {
+                let (mut var, mut lum, mut n) = (0.0f64, 0.0f64, 0usize);
+                for (x, (&v, &p)) in var_y.iter().zip(pixels).enumerate() {
+                    if camera.direction(x as f32 + 0.5, y as f32 + 0.5).y < 0.0 {
+                        var += v as f64;
+                        lum += crate::color::luminance(p) as f64;
+                        n += 1;
+                    }
+                }
+                (var, lum, n)
+            })
+            .collect();
+        let (var, lum, n) = rows
+            .iter()
+            .fold((0.0, 0.0, 0), |(a, b, c), r| (a + r.0, b + r.1, c + r.2));
         (n > 0).then(|| {
             let rms = (var / n as f64).sqrt();
             (rms, rms / (lum / n as f64).max(1e-30))
@@ -478,6 +490,42 @@ mod tests {
             .batch_variance_of_mean()
             .is_none()
         );
+    }
+
+    #[test]
+    fn the_sea_noise_is_the_rms_over_the_pixels_below_the_horizon() {
+        // a panorama's lower half looks down; rows summed side by side agree with one pass
+        let panorama = crate::config::Projection::Equirect { band_deg: None };
+        let camera = Camera::new(panorama, 64, 2.0);
+        let (w, h) = (camera.width, camera.height);
+        let mut rng = crate::rng::Rng::keyed(&[5]);
+        let film = Film {
+            image: RgbImage {
+                width: w,
+                height: h,
+                pixels: (0..w * h).map(|_| [rng.f64() as f32; 3]).collect(),
+            },
+            var_y: (0..w * h).map(|_| rng.f64() as f32).collect(),
+            spp: 4,
+            batches: None,
+        };
+        let (mut var, mut lum, mut n) = (0.0f64, 0.0f64, 0usize);
+        for i in 0..w * h {
+            if camera
+                .direction((i % w) as f32 + 0.5, (i / w) as f32 + 0.5)
+                .y
+                < 0.0
+            {
+                var += film.var_y[i] as f64;
+                lum += crate::color::luminance(film.image.pixels[i]) as f64;
+                n += 1;
+            }
+        }
+        assert_eq!(n, w * h / 2);
+        let (rms, relative) = film.noise_rms_sea(&camera).unwrap();
+        let want = (var / n as f64).sqrt();
+        assert!((rms / want - 1.0).abs() < 1e-12, "{rms} {want}");
+        assert!((relative / (want / (lum / n as f64)) - 1.0).abs() < 1e-12);
     }
 
     #[test]

@@ -315,13 +315,14 @@ fn write_film(
     png: &Path,
     film: &crate::render::film::Film,
     exposure: f32,
+    compression: crate::image_io::ExrCompression,
 ) -> Result<(), AppError> {
     let channels = film_channels(film);
     let extra: Vec<(&str, &[f32])> = channels
         .iter()
         .map(|(n, v)| (n.as_str(), v.as_slice()))
         .collect();
-    write_exr_with(exr, &film.image, &extra)?;
+    write_exr_with(exr, &film.image, &extra, compression)?;
     write_png(png, &film.image, exposure)?;
     Ok(())
 }
@@ -343,11 +344,13 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
 
     // One exposure for all, so the sheet compares like with like.
     let (exposure, _) = png_exposure(job.scene.render.exposure, &runs[0].1.film.image);
+    let compression = job.scene.render.exr_compression;
     for (info, r) in &runs {
-        write_film(&info.exr, &info.png, &r.film, exposure)?;
+        write_film(&info.exr, &info.png, &r.film, exposure, compression)?;
     }
     if let Some((t, r)) = &truth {
-        write_film(&t.exr, &t.exr.with_extension("png"), &r.film, exposure)?;
+        let png = t.exr.with_extension("png");
+        write_film(&t.exr, &png, &r.film, exposure, compression)?;
         let record = truth::TruthFile {
             scene: truth::scene(job),
             rows_deg: job.rows_deg,

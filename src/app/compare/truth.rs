@@ -105,7 +105,7 @@ pub(super) fn scene(job: &CompareJob) -> SceneConfig {
 
 /// What of two truth scenes differs in a way that may change the converged image, by
 /// section; empty when nothing does. The sample seed, the wrong-side policy (never
-/// consulted), the threads, the backend and the preview's exposure do not. (The tessellation
+/// consulted), the threads, the backend, the preview's exposure and the EXR's compression do not. (The tessellation
 /// must match: where its triangles end is where the sea ends.) A sky map is compared by its
 /// path as given.
 fn differences(a: &SceneConfig, b: &SceneConfig) -> Vec<&'static str> {
@@ -116,6 +116,7 @@ fn differences(a: &SceneConfig, b: &SceneConfig) -> Vec<&'static str> {
         c.render.threads = 0;
         c.render.backend = Default::default();
         c.render.exposure = None;
+        c.render.exr_compression = Default::default();
         c
     };
     let (a, b) = (normal(a), normal(b));
