@@ -284,8 +284,8 @@ pub fn write_exr_with(
     Ok(stage_exr_with(path, img, extra, compression)?.commit()?)
 }
 
-/// [`write_exr_with`], staged (see [`commit_all`]). The channels are compressed in parallel
-/// blocks (the exr crate's writer, on the calling thread pool) when `compression` asks for it.
+/// [`write_exr_with`], staged (see [`commit_all`]). PIZ and ZIP compress blocks in parallel
+/// (the exr crate's writer, on a pool of its own); uncompressed blocks are written as they are.
 pub fn stage_exr_with(
     path: &Path,
     img: &RgbImage,
@@ -426,8 +426,8 @@ pub fn write_png(path: &Path, img: &RgbImage, exposure: f32) -> Result<(), Image
 pub fn stage_png(path: &Path, img: &RgbImage, exposure: f32) -> Result<Staged, ImageError> {
     use rayon::prelude::*;
     let mut bytes = vec![0u8; img.pixels.len() * 3];
-    // rows side by side: the tone curve's powers were a tenth of a second of the default
-    // render on one core
+    // rows side by side (on the calling pool): the tone curve's powers were a tenth of a second
+    // of the default render on one core
     let row = img.width.max(1);
     bytes
         .par_chunks_mut(3 * row)
@@ -477,8 +477,8 @@ pub fn stage_json(path: &Path, value: &impl serde::Serialize) -> Result<Staged, 
 }
 
 /// Writes a linear-RGB EXR with half-float (f16) channels R, G, B and ZIP compression, the
-/// compact form for shipped sky maps (on the shipped maps 0.6 of PIZ's bytes, and read in half
-/// its time: docs/performance.md, "Output"). Values beyond half's range (65504) are refused
+/// compact form for shipped sky maps (on them 0.65 of PIZ's bytes in all, read in half its
+/// time: docs/performance.md, "Output"). Values beyond half's range (65504) are refused
 /// rather than written as infinity.
 pub fn write_exr_half(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
     use exr::prelude::*;

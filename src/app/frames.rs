@@ -220,6 +220,7 @@ pub fn run(job: &FramesJob) -> Result<SequenceReport, AppError> {
             ..Setup::default()
         },
     )?;
+    let pool = super::output_pool(cfg.render.threads)?;
     let mesh = prepared.accel.mesh();
     let mut report = SequenceReport {
         frames_planned: times.len(),
@@ -265,13 +266,14 @@ pub fn run(job: &FramesJob) -> Result<SequenceReport, AppError> {
             frame_path(&job.out, index, "png"),
         );
         let image = &r.film.image;
-        let (exposure, stops) = png_exposure(report.png_exposure_stops, image);
+        let (exposure, stops) = pool.install(|| png_exposure(report.png_exposure_stops, image));
         report.png_exposure_stops = Some(stops);
         let mut channels = vec![("Y.variance", &r.film.var_y[..])];
         channels.extend(r.aovs.channels());
+        let compression = cfg.render.exr_compression;
         let staged = vec![
-            stage_exr_with(&exr, image, &channels, cfg.render.exr_compression)?,
-            stage_png(&png, image, exposure)?,
+            pool.install(|| stage_exr_with(&exr, image, &channels, compression))?,
+            pool.install(|| stage_png(&png, image, exposure))?,
         ];
         commit_all(staged)?;
         report.width = r.report.width;

@@ -142,6 +142,14 @@ impl From<crate::render::pipeline::RenderError> for AppError {
     }
 }
 
+/// The threads a scene's files are encoded on: `render.threads`, as its trace had (0 = all
+/// cores), so that a case given one thread keeps to one while it writes.
+pub(crate) fn output_pool(threads: usize) -> Result<rayon::ThreadPool, AppError> {
+    Ok(rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()?)
+}
+
 impl From<rayon::ThreadPoolBuildError> for AppError {
     fn from(e: rayon::ThreadPoolBuildError) -> AppError {
         AppError::Run(e.into())

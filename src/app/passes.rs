@@ -150,8 +150,9 @@ pub struct MergeJob {
     pub out: PathBuf,
 }
 
-/// Checks that passes belong to one render: the same scene (whatever threads and exposure each
-/// used), the same image, seed, samples and number of passes, and no pass twice.
+/// Checks that passes belong to one render: the same scene (whatever threads, exposure and EXR
+/// compression each asked for), the same image, seed, samples and number of passes, and no
+/// pass twice.
 fn check_same_render(passes: &[Pass]) -> Result<(), AppError> {
     let first = &passes[0];
     let info = |p: &Pass| p.report.passes.clone().expect("read_pass checked");

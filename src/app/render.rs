@@ -51,6 +51,7 @@ pub fn run(job: &RenderJob) -> Result<RenderReport, AppError> {
     };
     let prepared = prepare_with(&job.scene, setup)?;
     let mut r = prepared.render(&job.scene, job.progress)?;
+    let pool = super::output_pool(job.scene.render.threads)?;
     // Freeing the ocean's layers and the BVH (50 ms on one core for the default scene) goes on
     // beside the writing of the files; the two images are encoded side by side.
     std::thread::scope(|s| -> Result<(), AppError> {
@@ -58,13 +59,15 @@ pub fn run(job: &RenderJob) -> Result<RenderReport, AppError> {
         let image = &r.film.image;
         let mut channels = vec![("Y.variance", &r.film.var_y[..])];
         channels.extend(r.aovs.channels());
-        let (staged_exr, staged_png) = rayon::join(
-            || stage_exr_with(&exr, image, &channels, job.scene.render.exr_compression),
-            || {
-                let (exposure, stops) = png_exposure(job.scene.render.exposure, image);
-                stage_png(&png, image, exposure).map(|s| (s, stops))
-            },
-        );
+        let (staged_exr, staged_png) = pool.install(|| {
+            rayon::join(
+                || stage_exr_with(&exr, image, &channels, job.scene.render.exr_compression),
+                || {
+                    let (exposure, stops) = png_exposure(job.scene.render.exposure, image);
+                    stage_png(&png, image, exposure).map(|s| (s, stops))
+                },
+            )
+        });
         let (staged_exr, (staged_png, stops)) = (staged_exr?, staged_png?);
         r.report.png_exposure_stops = Some(stops);
         r.report.exr = exr;

@@ -384,7 +384,7 @@ pub struct CompareArgs {
     /// (truth.exr, truth.json) instead of rendering it again: no wrong-side policy touches the
     /// truth, so a sweep over --wrong-side renders it once. Implies --against truth; refused
     /// when that truth's sea, tessellation, sky, camera, water, render settings or rows differ
-    /// (the sample seed, the policy, threads, backend and exposure may).
+    /// (the sample seed, the policy, threads, backend, exposure and EXR compression may).
     #[arg(long, value_name = "DIR")]
     pub truth_from: Option<PathBuf>,
     /// Output folder.

@@ -154,8 +154,8 @@ pub struct RenderConfig {
 
 /// How a render's EXR is stored (`render.exr_compression`, `--exr-compression`). Every choice
 /// is lossless. A path-traced image is mostly noise in its low mantissa bits, which no
-/// lossless coder removes: on the default render PIZ keeps 78 % of the bytes for 14 times the
-/// time of writing them as they are (docs/performance.md, "Output").
+/// lossless coder removes: on the default render PIZ keeps 78 % of the bytes and costs the
+/// whole run a tenth of its time (docs/performance.md, "Output").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum ExrCompression {

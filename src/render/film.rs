@@ -526,6 +526,15 @@ mod tests {
         let want = (var / n as f64).sqrt();
         assert!((rms / want - 1.0).abs() < 1e-12, "{rms} {want}");
         assert!((relative / (want / (lum / n as f64)) - 1.0).abs() < 1e-12);
+        // the same bits on one thread and on several
+        let on = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads);
+            pool.build()
+                .unwrap()
+                .install(|| film.noise_rms_sea(&camera))
+        };
+        assert_eq!(on(1), on(4));
+        assert_eq!(on(1), Some((rms, relative)));
     }
 
     #[test]

@@ -88,11 +88,12 @@ pub struct Setup {
     /// A spinner on stderr for each phase (the ocean's FFTs, the tessellation, the BVH build).
     pub progress: bool,
     /// An ocean already built for this scene's `[ocean]` and `render.ocean_seed`, used instead
-    /// of building it again (the comparison's two tessellations share one); one built for
+    /// of building it again (the comparison's tessellations share one, as do the accuracy
+    /// benchmark's); one built for
     /// another sea or seed is refused. Such a scene cannot [`Prepared::advance_to`].
     pub ocean: Option<Arc<Surface>>,
     /// A sky already built for this scene's `[sky]` and camera height, used instead of loading
-    /// it again (the comparison's two tessellations share one).
+    /// it again (the comparison's tessellations share one, as do the accuracy benchmark's).
     pub sky: Option<Arc<Sky>>,
 }
 
@@ -430,7 +431,7 @@ impl Prepared {
                 message,
             });
         }
-        let sea_noise = film.noise_rms_sea(&camera);
+        let sea_noise = self.pool.install(|| film.noise_rms_sea(&camera));
         let seconds_normal_map = c.normal_map_thread_seconds() / self.threads as f64;
         let folded_fraction = self.ocean.folded_fraction();
         let ocean_notes = self

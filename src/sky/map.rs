@@ -3,6 +3,7 @@
 use std::path::Path;
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use crate::equirect;
 use crate::image_io::{ImageError, RgbImage};
@@ -40,7 +41,6 @@ pub fn validate_map(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
             img.width, img.height
         )));
     }
-    use rayon::prelude::*;
     if let Some(i) = img
         .pixels
         .par_iter()

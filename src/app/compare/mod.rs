@@ -345,12 +345,13 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
     // One exposure for all, so the sheet compares like with like.
     let (exposure, _) = png_exposure(job.scene.render.exposure, &runs[0].1.film.image);
     let compression = job.scene.render.exr_compression;
+    let pool = super::output_pool(job.scene.render.threads)?;
     for (info, r) in &runs {
-        write_film(&info.exr, &info.png, &r.film, exposure, compression)?;
+        pool.install(|| write_film(&info.exr, &info.png, &r.film, exposure, compression))?;
     }
     if let Some((t, r)) = &truth {
         let png = t.exr.with_extension("png");
-        write_film(&t.exr, &png, &r.film, exposure, compression)?;
+        pool.install(|| write_film(&t.exr, &png, &r.film, exposure, compression))?;
         let record = truth::TruthFile {
             scene: truth::scene(job),
             rows_deg: job.rows_deg,

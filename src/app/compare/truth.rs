@@ -105,9 +105,9 @@ pub(super) fn scene(job: &CompareJob) -> SceneConfig {
 
 /// What of two truth scenes differs in a way that may change the converged image, by
 /// section; empty when nothing does. The sample seed, the wrong-side policy (never
-/// consulted), the threads, the backend, the preview's exposure and the EXR's compression do not. (The tessellation
-/// must match: where its triangles end is where the sea ends.) A sky map is compared by its
-/// path as given.
+/// consulted), the threads, the backend, the preview's exposure and the EXR's compression do
+/// not. (The tessellation must match: where its triangles end is where the sea ends.) A sky
+/// map is compared by its path as given.
 fn differences(a: &SceneConfig, b: &SceneConfig) -> Vec<&'static str> {
     let normal = |c: &SceneConfig| {
         let mut c = c.clone();
@@ -342,6 +342,7 @@ mod tests {
         same.render.seed += 1;
         same.render.wrong_side = crate::config::WrongSide::Mirror;
         same.render.exposure = Some(1.0);
+        same.render.exr_compression = crate::config::ExrCompression::Piz;
         same.render.threads = 1;
         assert!(against(&same).is_empty(), "{:?}", against(&same));
         // what does, by section

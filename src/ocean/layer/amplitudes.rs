@@ -214,6 +214,7 @@ impl BandCells {
     }
 
     /// The grid indices outside the reach: one run between the two ends of the grid.
+    #[inline]
     pub fn outside(&self) -> std::ops::Range<usize> {
         self.reach..self.n - self.reach + 1
     }

@@ -242,7 +242,7 @@ pub struct FieldPlanes([Vec<C32>; 4]);
 
 /// The spectral multipliers m_j(k) of [`Layer::compute_fields`]'s four planes.
 #[inline]
-fn multipliers(lam: f64, kx: f64, kz: f64) -> [C32; 4] {
+pub(super) fn multipliers(lam: f64, kx: f64, kz: f64) -> [C32; 4] {
     // (not hypot: no overflow or underflow to guard against at these wavenumbers, and glibc's
     // hypot was 3 % of the ocean's build; the multipliers are rounded to f32)
     let k = (kx * kx + kz * kz).sqrt();

@@ -472,6 +472,82 @@ fn band_cells_cover_the_band_once() {
                 assert!(cells.inside(i), "index {i} (signed {s}) of k_max {reach_k}");
             }
         }
+        // outside the reach: every other index, once (what the transforms clear)
+        let outside: Vec<usize> = cells.outside().collect();
+        assert_eq!(
+            outside,
+            (0..n).filter(|&i| !cells.inside(i)).collect::<Vec<_>>()
+        );
+    }
+}
+
+/// The column pass on one thread reuses its gathered columns from block to block, so every
+/// block but the first starts from the transforms of the one before: a layer whose band leaves
+/// rows out (they are cleared, not written) and that spans several blocks of columns, at a time
+/// that is not 0, against the direct Fourier sum at every texel.
+#[test]
+fn reused_columns_give_the_direct_sum_in_every_block() {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let n = 64;
+    let layer = pool.install(|| mid_layer(n, 8));
+    let rms: Vec<f64> = (0..FIELD_COUNT).map(|j| rms_of(&layer, j)).collect();
+    let rows = (0..n)
+        .filter(|&i| (signed_index(i, n) * TAU / 47.3).abs() < layer.k_max)
+        .count();
+    assert!(rows < n - 1, "the band leaves rows out ({rows} of {n})");
+    for iz in 0..n {
+        for ix in 0..n {
+            let d = layer.eval_direct(ix as f64 * layer.dx(), iz as f64 * layer.dx());
+            let t = layer.fields()[iz * n + ix];
+            for j in 0..FIELD_COUNT {
+                assert!(
+                    (t[j] as f64 - d[j]).abs() < 1e-5 * rms[j],
+                    "field {j} at ({ix},{iz}): {} vs {}",
+                    t[j],
+                    d[j]
+                );
+            }
+        }
+    }
+}
+
+/// The spectral multipliers take sqrt(kx^2 + kz^2) where they took hypot: on every cell of the
+/// default layers' bands the two round to the same f32 multipliers.
+#[test]
+fn multipliers_round_alike_with_hypot_on_the_default_layers() {
+    let hypot = |lam: f64, kx: f64, kz: f64| {
+        let k = kx.hypot(kz);
+        let (ux, uz) = if k > 0.0 {
+            (kx / k, kz / k)
+        } else {
+            (0.0, 0.0)
+        };
+        [
+            Complex::new(1.0 - lam * ux, 0.0),
+            Complex::new(-kx, lam * uz),
+            Complex::new(0.0, kz - lam * kx * ux),
+            Complex::new(-lam * kz * uz, -lam * kx * uz),
+        ]
+        .map(|m: Complex<f64>| C32::new(m.re as f32, m.im as f32))
+    };
+    let p = OceanParams::default();
+    for (i, l) in p.layers.iter().enumerate() {
+        let (n, dk) = (l.n, TAU / l.size_m);
+        let k_max = p.partition().support(i).1;
+        let reach = ((k_max / dk) as usize + 1).min(n / 2);
+        for ix in (0..reach).chain(n - reach + 1..n) {
+            for iz in (0..reach).chain(n - reach + 1..n) {
+                let (kx, kz) = (signed_index(ix, n) * dk, signed_index(iz, n) * dk);
+                assert_eq!(
+                    super::fields::multipliers(p.choppiness, kx, kz),
+                    hypot(p.choppiness, kx, kz),
+                    "layer {i} cell ({ix}, {iz})"
+                );
+            }
+        }
     }
 }
 

@@ -230,6 +230,8 @@ pub struct AccuracyReport {
     pub rows_deg: (f64, f64),
     /// The wrong-side policy of every render, the reference's included.
     pub wrong_side: crate::config::WrongSide,
+    /// Oceans built: one, which every tessellation and the reference render.
+    pub oceans_built: usize,
     pub seconds_total: f64,
     pub csv: PathBuf,
     pub png: PathBuf,
@@ -330,11 +332,12 @@ pub fn run(job: &AccuracyJob) -> Result<AccuracyReport, AppError> {
     );
     let ref_cfg = reference_scene(job);
     let band = Camera::new(ref_cfg.camera.projection, job.width, 2.0);
-    let (mut points, shared) = render_points(job, &band, &progress)?;
+    let (mut points, mut shared) = render_points(job, &band, &progress)?;
 
     // The reference: quadrupled until its noise is at most the share of the smallest error.
     let p = prepare_with(&ref_cfg, sweep::Shared::setup(Some(&shared)))?;
-    let seconds_ocean = shared.seconds_ocean;
+    shared.count(&p);
+    let (seconds_ocean, oceans_built) = (shared.seconds_ocean, shared.oceans_built);
     drop(shared);
     let (mut spp, mut tried, mut seconds) = (job.reference_spp, Vec::new(), seconds_ocean);
     seconds += p.seconds_tessellation + p.seconds_build;
@@ -379,7 +382,7 @@ pub fn run(job: &AccuracyJob) -> Result<AccuracyReport, AppError> {
     drop(p);
     let mut points: Vec<Point> = points.into_iter().map(|r| r.point).collect();
     mark_pareto(&mut points);
-    report::write(job, points, reference, t0)
+    report::write(job, points, reference, oceans_built, t0)
 }
 
 /// An error figure as the table prints it: "< upper bound" when its interval reaches 0.

@@ -15,6 +15,7 @@ pub(super) fn write(
     job: &AccuracyJob,
     points: Vec<Point>,
     reference: Reference,
+    oceans_built: usize,
     t0: Instant,
 ) -> Result<AccuracyReport, AppError> {
     let (csv, png, json) = (
@@ -109,6 +110,7 @@ pub(super) fn write(
         front,
         width: job.width,
         wrong_side: job.scene.render.wrong_side,
+        oceans_built,
         rows_deg: ROWS,
         seconds_total: t0.elapsed().as_secs_f64(),
         csv,

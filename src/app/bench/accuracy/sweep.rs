@@ -1,6 +1,7 @@
 //! The sweep's renders and measurements: every configuration rendered and kept over the
 //! analysed band, the reference rendered over that band, and each point's errors against it.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use super::{AccuracyJob, Point, ROWS, scene_with};
@@ -15,7 +16,6 @@ use crate::render::Camera;
 use crate::render::film::{Film, MAX_BATCHES, Samples};
 use crate::render::pipeline::{Prepared, Setup, prepare_with};
 use crate::sky::Sky;
-use std::sync::Arc;
 
 /// A point as rendered: its cost, and its film over the analysed band.
 pub(super) struct Rendered {
@@ -37,7 +37,8 @@ pub(super) fn render_points(
         let cfg = scene_with(job, t);
         let p = prepare_with(&cfg, Shared::setup(shared.as_ref()))?;
         let first = shared.get_or_insert_with(|| Shared::of(&p));
-        let shared = first.seconds_ocean + p.seconds_tessellation + p.seconds_build;
+        first.count(&p);
+        let set_up = first.seconds_ocean + p.seconds_tessellation + p.seconds_build;
         let structures = (p.ocean.bytes() + p.accel.mesh().bytes()) as u64 + p.accel.bytes();
         for &normals in &job.normals {
             for &spp in &job.spp {
@@ -61,7 +62,7 @@ pub(super) fn render_points(
                         seconds_build: rep.seconds_build,
                         seconds_trace: rep.seconds_trace,
                         seconds_normal_map: rep.seconds_normal_map,
-                        seconds_total: shared + rep.seconds_trace,
+                        seconds_total: set_up + rep.seconds_trace,
                         memory_bytes: structures + film_bytes,
                         rays: rep.rays,
                         error: f64::NAN,
@@ -81,7 +82,8 @@ pub(super) fn render_points(
             }
         }
     }
-    let shared = shared.ok_or_else(|| AppError::input("bench accuracy needs a tessellation"))?;
+    // (`check` refuses a job without tessellations)
+    let shared = shared.expect("at least one tessellation");
     Ok((out, shared))
 }
 
@@ -90,6 +92,8 @@ pub(super) struct Shared {
     ocean: Arc<Surface>,
     sky: Arc<Sky>,
     pub seconds_ocean: f64,
+    /// How many of the scenes prepared on these built an ocean of their own (1: the first).
+    pub oceans_built: usize,
 }
 
 impl Shared {
@@ -98,6 +102,14 @@ impl Shared {
             ocean: Arc::clone(&p.ocean),
             sky: Arc::clone(&p.sky),
             seconds_ocean: p.seconds_ocean,
+            oceans_built: 0,
+        }
+    }
+
+    /// Counts `p`'s ocean if it built one (a scene handed an ocean takes no time for it).
+    pub(super) fn count(&mut self, p: &Prepared) {
+        if !Arc::ptr_eq(&p.ocean, &self.ocean) || p.seconds_ocean > 0.0 {
+            self.oceans_built += 1;
         }
     }
 
