@@ -169,6 +169,23 @@ fn exact_surface_refuses_vertex_normals_and_bicubic_reads() {
     assert!(e.contains("ocean.interp"), "{e}");
 }
 
+/// Prefiltered slope fields leave the heights and displacements the bounds cover as they are:
+/// the exact surface reads them, with no NaN, hole or self-hit.
+#[test]
+fn an_exact_render_reads_prefiltered_slopes() {
+    let mut cfg = small_scene(SurfaceKind::Exact);
+    cfg.ocean.interp = vastocean::ocean::Interp::Prefiltered;
+    cfg.validate().unwrap();
+    let pre = vastocean::render::pipeline::render_scene(&cfg, false)
+        .unwrap()
+        .report;
+    assert_eq!(pre.backend, "rust-exact");
+    assert_eq!(pre.nan_count, 0);
+    assert_eq!(pre.escaped_below_horizon, 0);
+    assert_eq!(pre.self_hits, 0);
+    assert!(pre.counters.hits > 1000);
+}
+
 #[test]
 fn compare_refuses_an_exact_scene_and_checks_its_exact_scenario_before_any_work() {
     use vastocean::app::compare::{CompareJob, run};

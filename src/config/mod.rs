@@ -337,11 +337,14 @@ impl SceneConfig {
                     r.normals,
                 ));
             }
-            if self.ocean.interp != crate::ocean::Interp::Bilinear {
+            if !matches!(
+                self.ocean.interp,
+                crate::ocean::Interp::Bilinear | crate::ocean::Interp::Prefiltered
+            ) {
                 return Err(invalid(
                     "ocean.interp",
-                    "bilinear with render.surface = \"exact\" (the only read the surface's \
-                     bounds cover)",
+                    "bilinear or prefiltered with render.surface = \"exact\" (the reads the \
+                     surface's bounds cover)",
                     self.ocean.interp,
                 ));
             }

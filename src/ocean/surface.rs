@@ -300,7 +300,7 @@ fn compute_fields(layers: &mut [Layer], t: f64) {
 /// fraction of one half); None for the variance-preserving read, which has no such bound.
 fn read_reach(interp: Interp) -> Option<f64> {
     match interp {
-        Interp::Bilinear => Some(1.0),
+        Interp::Bilinear | Interp::Prefiltered => Some(1.0),
         Interp::Bicubic => Some(1.5625),
         Interp::VariancePreserving => None,
     }
@@ -364,6 +364,9 @@ impl Surface {
             }
             amplitude_scale = target / variance.sqrt();
             layers.iter_mut().for_each(|l| l.scale(amplitude_scale));
+        }
+        for l in &mut layers {
+            l.set_slope_prefilter(params.interp == Interp::Prefiltered);
         }
         compute_fields(&mut layers, params.time_s);
         let mut surface = Surface {

@@ -505,8 +505,9 @@ fn layers_sum_and_set_time_moves_waves() {
 /// hold the spectrum's integral of k^2 P (a few per cent of realization scatter: the slope
 /// variance sits in many modes); reads between grid points lose some of it, bilinear more than
 /// bicubic, each layer no more than its grid holds; the sum's slopes are the layers' added.
-/// Variance-preserving reads keep each layer's grid slopes (within 1 %), and so the spectrum's
-/// within 2 % on the default sea, the bound the slopes must meet.
+/// Prefiltered reads and variance-preserving ones keep each layer's grid slopes
+/// (within 1 %), and so the spectrum's within 2 % on the default sea, the bound the slopes must
+/// meet.
 #[test]
 fn mean_square_slope_of_the_spectrum_the_grid_and_the_lookup() {
     let read = |interp| {
@@ -516,12 +517,13 @@ fn mean_square_slope_of_the_spectrum_the_grid_and_the_lookup() {
         };
         Surface::new(&p, 3).unwrap().summary().clone()
     };
-    let (bilinear, bicubic, preserving) = (
+    let (bilinear, bicubic, preserving, prefiltered) = (
         read(Interp::Bilinear),
         read(Interp::Bicubic),
         read(Interp::VariancePreserving),
+        read(Interp::Prefiltered),
     );
-    for s in [&bilinear, &bicubic, &preserving] {
+    for s in [&bilinear, &bicubic, &preserving, &prefiltered] {
         assert!((s.mss_grid / s.mss_spectrum - 1.0).abs() < 0.03, "{s:?}");
         let layers: f64 = s.layers.iter().map(|l| l.mss_lookup).sum();
         // independent layers: cross terms average out over the 512^2 points
@@ -539,16 +541,17 @@ fn mean_square_slope_of_the_spectrum_the_grid_and_the_lookup() {
         bicubic.mss_lookup > bilinear.mss_lookup * 1.05,
         "{bicubic:?}"
     );
-    assert!(
-        (preserving.mss_lookup / preserving.mss_spectrum - 1.0).abs() < 0.02,
-        "{preserving:?}"
-    );
-    for l in &preserving.layers {
-        assert!((l.mss_lookup / l.mss_grid - 1.0).abs() < 0.01, "{l:?}");
+    for s in [&preserving, &prefiltered] {
+        assert!((s.mss_lookup / s.mss_spectrum - 1.0).abs() < 0.02, "{s:?}");
+        for l in &s.layers {
+            assert!((l.mss_lookup / l.mss_grid - 1.0).abs() < 0.01, "{l:?}");
+        }
     }
-    // The grid does not depend on how it is read.
+    // The grid does not depend on how it is read (the prefiltered layers' from the
+    // coefficients, by Parseval, to rounding).
     assert_eq!(bilinear.mss_grid, bicubic.mss_grid);
     assert_eq!(bilinear.mss_grid, preserving.mss_grid);
+    assert!((prefiltered.mss_grid / bilinear.mss_grid - 1.0).abs() < 1e-5);
 }
 
 #[test]

@@ -66,7 +66,10 @@ impl ExactSurface {
         origin: [f64; 2],
         earth_radius_m: f64,
     ) -> Result<ExactSurface, String> {
-        if ocean.params().interp != Interp::Bilinear {
+        if !matches!(
+            ocean.params().interp,
+            Interp::Bilinear | Interp::Prefiltered
+        ) {
             return Err(format!(
                 "the exact surface reads the layers bilinearly; ocean.interp is {}",
                 ocean.params().interp

@@ -6,7 +6,8 @@ use std::f64::consts::TAU;
 use rayon::prelude::*;
 use rustfft::num_complex::Complex;
 
-use super::{C32, FIELD_COUNT, GridStats, Layer, signed_index};
+use super::{C32, FIELD_COUNT, GridStats, Layer, read_power_transfer, signed_index};
+use crate::ocean::Interp;
 
 impl Layer {
     /// h~(k, t) of eq. 2 for cell `i` (kx-major) in f64.
@@ -92,6 +93,19 @@ impl Layer {
             self.fields = vec![[0.0; FIELD_COUNT]; n * n];
         }
         let rows = self.band_rows();
+        // the prefilter's gain per grid index along either axis (1 without it)
+        let gain: Vec<f32> = (0..n)
+            .map(|i| {
+                if self.slope_prefilter {
+                    let theta = TAU * signed(i) / n as f64;
+                    let keep = read_power_transfer(Interp::Bilinear, theta);
+                    (1.0 / keep.sqrt()) as f32
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        let gain = &gain;
         for p in &mut planes.0 {
             // fresh zero pages (calloc), first touched by the row pass on every core: zeroing
             // them here on one thread cost a 2048-texel layer a third of its time
@@ -100,15 +114,16 @@ impl Layer {
             }
             p.truncate(rows.len() * n);
         }
-        {
+        let sea_mss = {
             let this = &*self;
             let [p0, p1, p2, p3] = &mut planes.0;
-            p0.par_chunks_mut(n)
+            let sea_mss: f64 = p0
+                .par_chunks_mut(n)
                 .zip(p1.par_chunks_mut(n))
                 .zip(p2.par_chunks_mut(n))
                 .zip(p3.par_chunks_mut(n))
                 .zip(rows.par_iter())
-                .for_each_init(
+                .map_init(
                     || vec![C32::default(); scratch_len],
                     |scratch, ((((r0, r1), r2), r3), &ix)| {
                         let kx = signed(ix) * dk;
@@ -120,6 +135,7 @@ impl Layer {
                             row[outside.clone()].fill(C32::default());
                         }
                         let mut any = false;
+                        let mut mss = 0.0;
                         for iz in this.cells.grid_indices() {
                             let h = this.h_tilde(ix, iz, t);
                             if h == Complex::default() {
@@ -129,8 +145,13 @@ impl Layer {
                                 continue;
                             }
                             any = true;
+                            let kz = signed(iz) * dk;
                             let h = C32::new(h.re as f32, h.im as f32);
-                            let m = multipliers(lam, kx, signed(iz) * dk);
+                            let mut m = multipliers(lam, kx, kz);
+                            if this.slope_prefilter {
+                                mss += h.norm_sqr() as f64 * (kx * kx + kz * kz);
+                                prefilter_slopes(&mut m, gain[ix] * gain[iz]);
+                            }
                             for j in 0..4 {
                                 rows[j][iz] = h * m[j];
                             }
@@ -140,9 +161,12 @@ impl Layer {
                                 this.fft.process_with_scratch(row, scratch);
                             }
                         }
+                        mss
                     },
-                );
-        }
+                )
+                .sum();
+            sea_mss
+        };
         // Blocks of COLUMNS z rows: gathered over kx (runs of COLUMNS values per stored row),
         // transformed along kx, and each texel written once, measured as it is written.
         const COLUMNS: usize = 16;
@@ -203,6 +227,9 @@ impl Layer {
         let mut grid = blocks.iter().fold(GridStats::default(), |a, b| a.merge(b));
         grid.variance /= (n * n) as f64;
         grid.mss /= (n * n) as f64;
+        if self.slope_prefilter {
+            grid.mss = sea_mss;
+        }
         self.grid = grid;
     }
 
@@ -258,6 +285,18 @@ pub(super) fn multipliers(lam: f64, kx: f64, kz: f64) -> [C32; 4] {
         Complex::new(-lam * kz * uz, -lam * kx * uz),
     ]
     .map(|m| C32::new(m.re as f32, m.im as f32))
+}
+
+/// Scales the derivative fields of [`multipliers`]' planes by `gain` (real and even in k, so
+/// each plane's pair of fields stays a pair of real fields): Dz's partner dh/dx in plane 1, and
+/// planes 2 and 3 whole; h, Dx and Dz keep their multipliers.
+#[inline]
+fn prefilter_slopes(m: &mut [C32; 4], gain: f32) {
+    // plane 1 is (Dz, dh/dx) = h~ (m_dz + i m_dhdx) with m_dz = i lambda uz and m_dhdx = i kx:
+    // its real part is dh/dx's
+    m[1].re *= gain;
+    m[2] *= gain;
+    m[3] *= gain;
 }
 
 /// Out-of-place transpose of an n x n matrix in row blocks, so reads stay in short runs (the

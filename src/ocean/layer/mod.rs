@@ -89,7 +89,8 @@ type C32 = Complex<f32>;
 pub struct GridStats {
     /// Mean of h^2 (the layer's variance over its period), m^2.
     pub variance: f64,
-    /// Mean of |grad h|^2 (the exact spectral gradients).
+    /// Mean of |grad h|^2 (the exact spectral gradients) of the sea: with prefiltered slope
+    /// fields, by Parseval from the coefficients before the prefilter (the texels hold more).
     pub mss: f64,
     /// The largest |dDx/dx|, |dDz/dz| and |dDx/dz|: a bound on what any bilinear read returns.
     pub max_strain: [f32; 3],
@@ -141,6 +142,9 @@ pub struct Layer {
     /// Each field's correlations between neighbouring texels, for variance-preserving reads:
     /// computed on first use, forgotten when the fields change.
     lag_correlations: std::sync::OnceLock<LagCorrelations>,
+    /// Whether the derivative fields are prefiltered for bilinear reads
+    /// ([`Layer::set_slope_prefilter`]).
+    slope_prefilter: bool,
     fft: Arc<dyn Fft<f32>>,
     inv_dx: f64,
 }
@@ -282,9 +286,25 @@ impl Layer {
             fields: Vec::new(),
             grid: GridStats::default(),
             lag_correlations: std::sync::OnceLock::new(),
+            slope_prefilter: false,
             fft,
             inv_dx: n as f64 / size_m,
         }
+    }
+
+    /// Whether the next [`Layer::compute_fields`] prefilters the five derivative fields so
+    /// that a bilinear read keeps, on average over the positions between grid points, each
+    /// wave's power ([`super::Interp::Prefiltered`]): each wave's coefficient in them is
+    /// divided by sqrt(T(theta_x) T(theta_z)), with T = [`read_power_transfer`] of a bilinear
+    /// read. The heights and displacements stay the sea's own samples (Dz to the rounding of
+    /// the transform it shares with dh/dx).
+    pub fn set_slope_prefilter(&mut self, on: bool) {
+        self.slope_prefilter = on;
+    }
+
+    /// See [`Layer::set_slope_prefilter`].
+    pub fn slope_prefilter(&self) -> bool {
+        self.slope_prefilter
     }
 
     pub fn size_m(&self) -> f64 {
@@ -373,5 +393,7 @@ pub fn jacobian(t: &Texel) -> f32 {
     (1.0 + t[field::DDX_DX]) * (1.0 + t[field::DDZ_DZ]) - t[field::DDX_DZ] * t[field::DDX_DZ]
 }
 
+#[cfg(test)]
+mod read_tests;
 #[cfg(test)]
 mod tests;

@@ -103,7 +103,8 @@ fn catmull_rom(t: f32) -> [f32; 4] {
 /// A 2-D read keeps the product of its two axes' (and over a period the cross terms between
 /// waves average to zero, so a field read keeps the sum over its waves). A variance-preserving
 /// read rescales each field to its grid variance: 1 here, exact for the field's total, not
-/// wave by wave (it shifts power towards the shorter waves).
+/// wave by wave (it shifts power towards the shorter waves). A prefiltered read keeps each
+/// wave's power of the derivative fields it is used for: 1 ([`Layer::set_slope_prefilter`]).
 pub fn read_power_transfer(interp: Interp, theta: f64) -> f64 {
     const GAUSS: [(f64, f64); 4] = [
         (0.069_431_844_202_973_7, 0.173_927_422_568_726_9),
@@ -129,7 +130,7 @@ pub fn read_power_transfer(interp: Interp, theta: f64) -> f64 {
     match interp {
         Interp::Bilinear => mean(&|t| [1.0 - t, t, 0.0, 0.0], 2),
         Interp::Bicubic => mean(&|t| catmull_rom(t as f32).map(f64::from), 4),
-        Interp::VariancePreserving => 1.0,
+        Interp::VariancePreserving | Interp::Prefiltered => 1.0,
     }
 }
 
@@ -304,7 +305,7 @@ impl Layer {
     #[inline]
     pub fn read(&self, px: f64, pz: f64, interp: Interp) -> Texel {
         match interp {
-            Interp::Bilinear => self.bilinear(px, pz),
+            Interp::Bilinear | Interp::Prefiltered => self.bilinear(px, pz),
             Interp::Bicubic => self.bicubic(px, pz),
             Interp::VariancePreserving => self.variance_preserving(px, pz),
         }

@@ -2,54 +2,19 @@
 //! the spectrum's band integral.
 
 use super::*;
-use crate::ocean::{Interp, OceanParams, SpectrumKind, SpreadingKind};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use crate::ocean::{OceanParams, SpectrumKind, SpreadingKind};
 
-#[test]
-fn split_lanes_is_split() {
-    let below = |x: f64| f64::from_bits(x.to_bits() - 1);
-    let mut values = vec![0.0, -0.0, 1e-300, -1e-300, 0.5, -0.5, 2.5, -2.5, 3.0, -3.0];
-    values.extend([
-        below(1.0),
-        -below(1.0),
-        below(-3.0),
-        1e9 + 0.25,
-        -1e9 - 0.75,
-    ]);
-    values.extend([
-        LANE_RANGE - 0.5,
-        -(LANE_RANGE - 0.5),
-        below(LANE_RANGE),
-        -1234.0,
-    ]);
-    for chunk in values.chunks(8) {
-        let mut p = [0.0; 8];
-        p[..chunk.len()].copy_from_slice(chunk);
-        let (i, f) = split_lanes(&p);
-        for l in 0..8 {
-            let (si, sf) = split(p[l]);
-            assert_eq!(
-                (i[l] as i64, f[l].to_bits()),
-                (si, sf.to_bits()),
-                "at {}",
-                p[l]
-            );
-        }
-    }
-}
-
-fn spectrum(p: &OceanParams) -> Spectrum {
+pub(super) fn spectrum(p: &OceanParams) -> Spectrum {
     Spectrum::new(p)
 }
 
-fn rms_of(layer: &Layer, j: usize) -> f64 {
+pub(super) fn rms_of(layer: &Layer, j: usize) -> f64 {
     let s: f64 = layer.fields().iter().map(|t| (t[j] as f64).powi(2)).sum();
     (s / layer.fields().len() as f64).sqrt()
 }
 
 /// A 47.3 m layer of case 22 holding the band the default surface gives it, at n = 128.
-fn mid_layer(n: usize, seed: u64) -> Layer {
+pub(super) fn mid_layer(n: usize, seed: u64) -> Layer {
     let p = OceanParams::default();
     // the band spans a factor 8 up to half Nyquist, as the default 47.3 m / 512 layer's does
     let band = (
@@ -181,94 +146,6 @@ fn fft_gradients_match_finite_differences() {
     let rel = (err / norm).sqrt();
     // half-Nyquist band: sin(k dx)/(k dx) >= 0.64 at its edge, much better where energy is
     assert!(rel < 0.15, "grid central difference vs FFT gradient: {rel}");
-}
-
-#[test]
-fn interpolation_error_against_direct_sum() {
-    let layer = mid_layer(128, 4);
-    let mut rng = ChaCha8Rng::seed_from_u64(99);
-    let mut err = [[0.0f64; 2]; 3];
-    let mut norm = [0.0f64; 2];
-    for _ in 0..400 {
-        let x = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 * layer.size_m();
-        let z = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 * layer.size_m();
-        let d = layer.eval_direct(x, z);
-        let (px, pz) = (x * layer.inv_dx(), z * layer.inv_dx());
-        let all = [
-            Interp::Bilinear,
-            Interp::Bicubic,
-            Interp::VariancePreserving,
-        ];
-        for (m, interp) in all.into_iter().enumerate() {
-            let r = layer.read(px, pz, interp);
-            for (q, j) in [field::H, field::DH_DX].into_iter().enumerate() {
-                err[m][q] += (r[j] as f64 - d[j]).powi(2);
-                if m == 0 {
-                    norm[q] += d[j] * d[j];
-                }
-            }
-        }
-    }
-    let rel = |m: usize, q: usize| (err[m][q] / norm[q]).sqrt();
-    println!(
-        "interp rms error / rms: h bilinear {:.2e} bicubic {:.2e} variance-preserving {:.2e}; dh/dx bilinear {:.2e} bicubic {:.2e} variance-preserving {:.2e}",
-        rel(0, 0),
-        rel(1, 0),
-        rel(2, 0),
-        rel(0, 1),
-        rel(1, 1),
-        rel(2, 1)
-    );
-    for q in 0..2 {
-        assert!(rel(1, q) < 0.5 * rel(0, q), "bicubic must beat bilinear");
-        // keeping the variance does not cost accuracy point by point
-        assert!(
-            rel(2, q) < rel(0, q),
-            "variance-preserving must not be worse than bilinear"
-        );
-    }
-    assert!(rel(0, 0) < 0.05 && rel(1, 0) < 0.012);
-    assert!(rel(0, 1) < 0.12 && rel(1, 1) < 0.03);
-}
-
-/// Variance-preserving reads: a texel at its grid point, bit for bit; between grid points every
-/// field keeps its grid variance (within 3 % over 20 000 points) on a layer whose band runs to
-/// full Nyquist, where a bilinear read of the slopes loses over 10 % of it.
-#[test]
-fn variance_preserving_reads_keep_every_fields_variance() {
-    let p = OceanParams::default();
-    let n = 64;
-    let band = (4.0 * TAU / 47.3, std::f64::consts::PI * n as f64 / 47.3);
-    let layer = Layer::new(&spectrum(&p), 47.3, n, band, 1.0, 5, 0.0).unwrap();
-    for (ix, iz) in [(0, 0), (5, 63), (31, 17)] {
-        let got = layer.variance_preserving(ix as f64, iz as f64);
-        assert_eq!(got, layer.fields()[iz * n + ix]);
-    }
-    let mut rng = ChaCha8Rng::seed_from_u64(7);
-    let (mut preserving, mut bilinear) = ([0f64; FIELD_COUNT], [0f64; FIELD_COUNT]);
-    let points = 20_000;
-    for _ in 0..points {
-        let px = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 * n as f64;
-        let pz = (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 * n as f64;
-        let (a, b) = (layer.variance_preserving(px, pz), layer.bilinear(px, pz));
-        for j in 0..FIELD_COUNT {
-            preserving[j] += (a[j] as f64).powi(2) / points as f64;
-            bilinear[j] += (b[j] as f64).powi(2) / points as f64;
-        }
-    }
-    for (j, got) in preserving.iter().enumerate() {
-        let grid = rms_of(&layer, j).powi(2);
-        assert!(
-            (got / grid - 1.0).abs() < 0.03,
-            "field {j}: {got} vs {grid}"
-        );
-    }
-    let slope = rms_of(&layer, field::DH_DX).powi(2);
-    assert!(
-        bilinear[field::DH_DX] < 0.9 * slope,
-        "{} vs {slope}",
-        bilinear[field::DH_DX]
-    );
 }
 
 #[test]
