@@ -232,6 +232,12 @@ impl fmt::Display for OceanReport {
             p.interp,
             100.0 * (s.mss_lookup / s.mss_spectrum - 1.0)
         )?;
+        writeln!(
+            f,
+            "    the bilinear height surface's own slopes (the exact surface's tangent plane): {:.5} ({:+.1} %)",
+            s.mss_surface,
+            100.0 * (s.mss_surface / s.mss_spectrum - 1.0)
+        )?;
         if let Some(cm) = s.cox_munk_mss {
             writeln!(
                 f,
@@ -244,11 +250,13 @@ impl fmt::Display for OceanReport {
         for (i, l) in s.layers.iter().enumerate() {
             writeln!(
                 f,
-                "    layer {i}: {:.5} spectrum, {:.5} grid points, {:.5} as read ({:+.1} %)",
+                "    layer {i}: {:.5} spectrum, {:.5} grid points, {:.5} as read ({:+.1} %), {:.5} surface ({:+.1} %)",
                 l.mss_spectrum,
                 l.mss_grid,
                 l.mss_lookup,
-                100.0 * (l.mss_lookup / l.mss_spectrum - 1.0)
+                100.0 * (l.mss_lookup / l.mss_spectrum - 1.0),
+                l.mss_surface,
+                100.0 * (l.mss_surface / l.mss_spectrum - 1.0)
             )?;
         }
         if let Some(fp) = &self.footprint {

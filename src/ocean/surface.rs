@@ -17,18 +17,12 @@
 use std::sync::OnceLock;
 use std::time::Instant;
 
-use rayon::prelude::*;
-
 use super::layer::{
     FIELD_COUNT, FieldPlanes, Layer, SLOPES, Slopes, Texel, add_texel, field, slopes,
 };
 use super::slopes::{SlopeSource, SurfaceSlopes};
 use super::spectrum::Spectrum;
 use super::{Interp, MAX_LAYERS, OceanError, OceanParams};
-
-/// Side of the jittered grid that estimates the folded fraction and RMS of the summed surface
-/// over the coarsest layer's period (stderr of a fraction p: sqrt(p / 512^2)).
-const STATS_GRID: usize = 512;
 
 /// A sum of FFT layers, immutable once built (so `Send + Sync` and shared by all render threads).
 pub struct Surface {
@@ -49,23 +43,6 @@ pub struct Surface {
     /// [`Surface::summary`], computed on first use (62 ms for the default ocean: band integrals
     /// of the spectrum and passes over every texel) and kept until the time changes.
     summary: OnceLock<OceanSummary>,
-}
-
-/// What [`Surface::sampled`] measures of the summed surface as a render reads it, on a jittered
-/// STATS_GRID^2 grid over the coarsest layer's period.
-#[derive(Clone, Debug, Default)]
-struct Sampled {
-    folded_fraction: f64,
-    rms_m: f64,
-    /// Mean square slope |grad h|^2 of the summed surface (the surface's interpolation).
-    mss: f64,
-    /// Per layer: its mean square slope as read between the grid points.
-    lookup_mss: Vec<f64>,
-}
-
-/// |grad h|^2 of a texel (or of summed fields).
-fn slope2(t: &Texel) -> f64 {
-    (t[field::DH_DX] as f64).powi(2) + (t[field::DH_DZ] as f64).powi(2)
 }
 
 /// The surface at one nominal position.
@@ -366,7 +343,7 @@ impl Surface {
             layers.iter_mut().for_each(|l| l.scale(amplitude_scale));
         }
         for l in &mut layers {
-            l.set_slope_prefilter(params.interp == Interp::Prefiltered);
+            l.set_prefilter(params.interp == Interp::Prefiltered);
         }
         compute_fields(&mut layers, params.time_s);
         let mut surface = Surface {
@@ -524,59 +501,11 @@ impl Surface {
             .sum::<f64>()
             .sqrt()
     }
-
-    /// Folded fraction, RMS and mean square slope of the summed surface, and each layer's mean
-    /// square slope as read, on a jittered STATS_GRID^2 grid over the coarsest layer's period;
-    /// rows are summed in order so the result is thread-count free.
-    fn sampled(&self) -> &Sampled {
-        self.sampled.get_or_init(|| {
-            let Some(l0) = self.layers.first() else {
-                return Sampled::default();
-            };
-            let size = l0.size_m();
-            let (layers, interp, m) = (&self.layers, self.params.interp, STATS_GRID);
-            // Per row: folded points, sum of h^2, of |grad h|^2, and of each layer's |grad h|^2.
-            type Row = (usize, f64, f64, [f64; MAX_LAYERS]);
-            let rows: Vec<Row> = (0..m)
-                .into_par_iter()
-                .map(|r| {
-                    let mut row: Row = (0, 0.0, 0.0, [0.0; MAX_LAYERS]);
-                    for c in 0..m {
-                        let h = crate::rng::splitmix64(((r * m + c) as u64) ^ self.seed);
-                        let jx = (h & 0xFFFF_FFFF) as f64 / 4_294_967_296.0;
-                        let jz = (h >> 32) as f64 / 4_294_967_296.0;
-                        let u = ((c as f64 + jx) / m as f64 * size) as f32;
-                        let v = ((r as f64 + jz) / m as f64 * size) as f32;
-                        // What `Sampler::fields` sums for the origin (0, 0), layer by layer.
-                        let mut sum = [0.0f32; FIELD_COUNT];
-                        for (i, l) in layers.iter().enumerate() {
-                            let t = l.read(u as f64 * l.inv_dx(), v as f64 * l.inv_dx(), interp);
-                            row.3[i] += slope2(&t);
-                            add_texel(&mut sum, &t);
-                        }
-                        let s = Sample::from_fields(&sum);
-                        row.0 += usize::from(s.jacobian <= 0.0);
-                        row.1 += (s.height as f64).powi(2);
-                        row.2 += slope2(&sum);
-                    }
-                    row
-                })
-                .collect();
-            let total = (m * m) as f64;
-            Sampled {
-                folded_fraction: rows.iter().map(|r| r.0).sum::<usize>() as f64 / total,
-                rms_m: (rows.iter().map(|r| r.1).sum::<f64>() / total).sqrt(),
-                mss: rows.iter().map(|r| r.2).sum::<f64>() / total,
-                lookup_mss: (0..layers.len())
-                    .map(|i| rows.iter().map(|r| r.3[i]).sum::<f64>() / total)
-                    .collect(),
-            }
-        })
-    }
 }
 
 #[path = "surface_summary.rs"]
 mod summary;
+use summary::Sampled;
 pub use summary::{LayerSummary, OceanSummary, PartitionSummary};
 
 #[cfg(test)]

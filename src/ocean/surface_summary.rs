@@ -3,9 +3,11 @@
 //! summed surface's statistics. Computed on first use and kept until the time changes; a render
 //! reads only the cheap figures ([`Surface::folded_fraction`], [`Surface::realization_rms_m`]).
 
+use rayon::prelude::*;
 use serde::Serialize;
 
 use super::Surface;
+use super::{FIELD_COUNT, MAX_LAYERS, Sample, Texel, add_texel, field};
 use crate::ocean::spectrum::Part;
 use crate::ocean::{SpectrumKind, SpreadingKind};
 
@@ -17,6 +19,31 @@ pub const COX_MUNK_Z0_M: f64 = 1e-4;
 pub fn cox_munk_mss(u10: f64) -> f64 {
     let u12_5 = u10 * (12.5 / COX_MUNK_Z0_M).ln() / (10.0 / COX_MUNK_Z0_M).ln();
     0.003 + 5.12e-3 * u12_5
+}
+
+/// Side of the jittered grid that estimates the folded fraction and RMS of the summed surface
+/// over the coarsest layer's period (stderr of a fraction p: sqrt(p / 512^2)).
+const STATS_GRID: usize = 512;
+
+/// What [`Surface::sampled`] measures of the summed surface as a render reads it, on a jittered
+/// STATS_GRID^2 grid over the coarsest layer's period.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Sampled {
+    pub(super) folded_fraction: f64,
+    rms_m: f64,
+    /// Mean square slope |grad h|^2 of the summed surface (the surface's interpolation).
+    mss: f64,
+    /// Mean square slope of the summed bilinear height surface itself (its own gradient).
+    surface_mss: f64,
+    /// Per layer: its mean square slope as read between the grid points.
+    lookup_mss: Vec<f64>,
+    /// Per layer: the mean square slope of its bilinear height surface.
+    surface_layer_mss: Vec<f64>,
+}
+
+/// |grad h|^2 of a texel (or of summed fields).
+pub(super) fn slope2(t: &Texel) -> f64 {
+    (t[field::DH_DX] as f64).powi(2) + (t[field::DH_DZ] as f64).powi(2)
 }
 
 /// Per-layer part of [`OceanSummary`].
@@ -37,6 +64,9 @@ pub struct LayerSummary {
     pub mss_spectrum: f64,
     pub mss_grid: f64,
     pub mss_lookup: f64,
+    /// The mean square slope of the layer's bilinear height surface itself (its own gradient,
+    /// what the exact surface's tangent plane sees), same points.
+    pub mss_surface: f64,
     /// Where this layer alone folds.
     pub folded_fraction: f64,
 }
@@ -80,6 +110,10 @@ pub struct OceanSummary {
     pub mss_spectrum: f64,
     pub mss_grid: f64,
     pub mss_lookup: f64,
+    /// The same of the summed bilinear height surface's own gradient: the slopes of the surface
+    /// the exact intersector meets, which `compare --against truth` shades with its tangent
+    /// plane (whatever `interp` the normals read).
+    pub mss_surface: f64,
     /// The largest wavenumber any layer holds, rad/m: the spectrum's cut-off (shorter waves,
     /// the capillaries among them, are not in the surface).
     pub spectrum_cutoff_rad_m: f64,
@@ -137,6 +171,7 @@ impl Surface {
                     mss_spectrum: band(2) * self.amplitude_scale.powi(2),
                     mss_grid: l.grid_stats().mss,
                     mss_lookup: sampled.lookup_mss.get(i).copied().unwrap_or(0.0),
+                    mss_surface: sampled.surface_layer_mss.get(i).copied().unwrap_or(0.0),
                     folded_fraction: l.folded_fraction(),
                 }
             })
@@ -158,6 +193,7 @@ impl Surface {
             mss_spectrum: layers.iter().map(|l| l.mss_spectrum).sum(),
             mss_grid: layers.iter().map(|l| l.mss_grid).sum(),
             mss_lookup: sampled.mss,
+            mss_surface: sampled.surface_mss,
             spectrum_cutoff_rad_m: layers.iter().map(|l| l.k_max).fold(0.0, f64::max),
             cox_munk_mss: s
                 .filter(|_| self.params.wind_speed > 0.0)
@@ -170,6 +206,66 @@ impl Surface {
             partitions: self.partitions(&layers),
             layers,
         }
+    }
+
+    /// Folded fraction, RMS and mean square slope of the summed surface, and each layer's mean
+    /// square slope as read, on a jittered STATS_GRID^2 grid over the coarsest layer's period;
+    /// rows are summed in order so the result is thread-count free.
+    pub(super) fn sampled(&self) -> &Sampled {
+        self.sampled.get_or_init(|| {
+            let Some(l0) = self.layers.first() else {
+                return Sampled::default();
+            };
+            let size = l0.size_m();
+            let (layers, interp, m) = (&self.layers, self.params.interp, STATS_GRID);
+            // Per row: folded points, sum of h^2, of |grad h|^2 as read, and of each layer's;
+            // and of the bilinear height surface's own |grad h|^2, summed and each layer's.
+            type Row = (usize, f64, f64, [f64; MAX_LAYERS], f64, [f64; MAX_LAYERS]);
+            let rows: Vec<Row> = (0..m)
+                .into_par_iter()
+                .map(|r| {
+                    let mut row: Row = (0, 0.0, 0.0, [0.0; MAX_LAYERS], 0.0, [0.0; MAX_LAYERS]);
+                    for c in 0..m {
+                        let h = crate::rng::splitmix64(((r * m + c) as u64) ^ self.seed);
+                        let jx = (h & 0xFFFF_FFFF) as f64 / 4_294_967_296.0;
+                        let jz = (h >> 32) as f64 / 4_294_967_296.0;
+                        let u = ((c as f64 + jx) / m as f64 * size) as f32;
+                        let v = ((r as f64 + jz) / m as f64 * size) as f32;
+                        // What `Sampler::fields` sums for the origin (0, 0), layer by layer.
+                        let mut sum = [0.0f32; FIELD_COUNT];
+                        let mut grad = [0.0f64; 2];
+                        for (i, l) in layers.iter().enumerate() {
+                            let (px, pz) = (u as f64 * l.inv_dx(), v as f64 * l.inv_dx());
+                            let t = l.read(px, pz, interp);
+                            row.3[i] += slope2(&t);
+                            add_texel(&mut sum, &t);
+                            let g = l.surface_gradient(px, pz);
+                            row.5[i] += g[0] * g[0] + g[1] * g[1];
+                            grad = [grad[0] + g[0], grad[1] + g[1]];
+                        }
+                        row.4 += grad[0] * grad[0] + grad[1] * grad[1];
+                        let s = Sample::from_fields(&sum);
+                        row.0 += usize::from(s.jacobian <= 0.0);
+                        row.1 += (s.height as f64).powi(2);
+                        row.2 += slope2(&sum);
+                    }
+                    row
+                })
+                .collect();
+            let total = (m * m) as f64;
+            Sampled {
+                folded_fraction: rows.iter().map(|r| r.0).sum::<usize>() as f64 / total,
+                rms_m: (rows.iter().map(|r| r.1).sum::<f64>() / total).sqrt(),
+                mss: rows.iter().map(|r| r.2).sum::<f64>() / total,
+                surface_mss: rows.iter().map(|r| r.4).sum::<f64>() / total,
+                lookup_mss: (0..layers.len())
+                    .map(|i| rows.iter().map(|r| r.3[i]).sum::<f64>() / total)
+                    .collect(),
+                surface_layer_mss: (0..layers.len())
+                    .map(|i| rows.iter().map(|r| r.5[i]).sum::<f64>() / total)
+                    .collect(),
+            }
+        })
     }
 
     /// Each partition's expected share of the layers' variance (the wind sea first).

@@ -2,6 +2,7 @@
 //! sampler against the direct Fourier sum, RMS targets, variance of the union of bands, far
 //! origins, folding, and time.
 
+use super::summary::slope2;
 use super::*;
 use crate::ocean::{LayerSpec, SpreadingKind};
 

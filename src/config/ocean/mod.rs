@@ -59,15 +59,14 @@ pub enum Interp {
     /// blending): every field keeps its grid variance at every point, so the slopes keep the
     /// spectrum's mean square where a bilinear blend of waves 2-5 texels long loses 10-25 % of it.
     VariancePreserving,
-    /// Bilinear reads, of slope fields prefiltered so that a read keeps each wave's slope power:
-    /// the derivative fields' Fourier coefficients are divided by the square root of the power
-    /// a bilinear read keeps of their wave on average over the positions between grid points,
-    /// (2 + cos theta) / 3 per axis for a wave advancing theta radians a texel. The heights and
-    /// displacements, which place the mesh's vertices and the exact surface, are the paper's
-    /// bilinear reads of the sea's own samples. The mapped normals keep the spectrum's mean
-    /// square slope (where a bilinear read of waves 2-5 texels long loses 10-25 % of it), and
-    /// their pointwise error against the direct Fourier sum falls (docs/ocean.md, "Reading
-    /// the layers").
+    /// Bilinear reads, of fields prefiltered for them: each wave's coefficient in the five
+    /// derivative fields is divided by the square root of the power a bilinear read keeps of it
+    /// on average over the positions between grid points, (2 + cos theta) / 3 per axis for a
+    /// wave advancing theta radians a texel, and in h, Dx and Dz scaled so that the slope of
+    /// their bilinear blend (the mesh's and the exact surface's) keeps the wave's slope power.
+    /// The mapped normals and the surface keep the spectrum's mean square slope (where bilinear
+    /// reads of waves 2-5 texels long lose 10-25 % of it), and both are closer to the direct
+    /// Fourier sum point by point (docs/ocean.md, "Reading the layers").
     Prefiltered,
 }
 

@@ -93,19 +93,8 @@ impl Layer {
             self.fields = vec![[0.0; FIELD_COUNT]; n * n];
         }
         let rows = self.band_rows();
-        // the prefilter's gain per grid index along either axis (1 without it)
-        let gain: Vec<f32> = (0..n)
-            .map(|i| {
-                if self.slope_prefilter {
-                    let theta = TAU * signed(i) / n as f64;
-                    let keep = read_power_transfer(Interp::Bilinear, theta);
-                    (1.0 / keep.sqrt()) as f32
-                } else {
-                    1.0
-                }
-            })
-            .collect();
-        let gain = &gain;
+        let prefilter = self.prefilter.then(|| Prefilter::new(n));
+        let prefilter = prefilter.as_ref();
         for p in &mut planes.0 {
             // fresh zero pages (calloc), first touched by the row pass on every core: zeroing
             // them here on one thread cost a 2048-texel layer a third of its time
@@ -114,11 +103,11 @@ impl Layer {
             }
             p.truncate(rows.len() * n);
         }
-        let sea_mss = {
+        // the sea's variance and mean square slope by Parseval, before any prefilter
+        let sea: [f64; 2] = {
             let this = &*self;
             let [p0, p1, p2, p3] = &mut planes.0;
-            let sea_mss: f64 = p0
-                .par_chunks_mut(n)
+            p0.par_chunks_mut(n)
                 .zip(p1.par_chunks_mut(n))
                 .zip(p2.par_chunks_mut(n))
                 .zip(p3.par_chunks_mut(n))
@@ -135,7 +124,7 @@ impl Layer {
                             row[outside.clone()].fill(C32::default());
                         }
                         let mut any = false;
-                        let mut mss = 0.0;
+                        let mut sea = [0.0f64; 2];
                         for iz in this.cells.grid_indices() {
                             let h = this.h_tilde(ix, iz, t);
                             if h == Complex::default() {
@@ -148,9 +137,11 @@ impl Layer {
                             let kz = signed(iz) * dk;
                             let h = C32::new(h.re as f32, h.im as f32);
                             let mut m = multipliers(lam, kx, kz);
-                            if this.slope_prefilter {
-                                mss += h.norm_sqr() as f64 * (kx * kx + kz * kz);
-                                prefilter_slopes(&mut m, gain[ix] * gain[iz]);
+                            if let Some(p) = prefilter {
+                                let power = h.norm_sqr() as f64;
+                                sea[0] += power;
+                                sea[1] += power * (kx * kx + kz * kz);
+                                p.apply(&mut m, ix, iz);
                             }
                             for j in 0..4 {
                                 rows[j][iz] = h * m[j];
@@ -161,11 +152,10 @@ impl Layer {
                                 this.fft.process_with_scratch(row, scratch);
                             }
                         }
-                        mss
+                        sea
                     },
                 )
-                .sum();
-            sea_mss
+                .reduce(|| [0.0; 2], |a, b| [a[0] + b[0], a[1] + b[1]])
         };
         // Blocks of COLUMNS z rows: gathered over kx (runs of COLUMNS values per stored row),
         // transformed along kx, and each texel written once, measured as it is written.
@@ -227,8 +217,8 @@ impl Layer {
         let mut grid = blocks.iter().fold(GridStats::default(), |a, b| a.merge(b));
         grid.variance /= (n * n) as f64;
         grid.mss /= (n * n) as f64;
-        if self.slope_prefilter {
-            grid.mss = sea_mss;
+        if self.prefilter {
+            [grid.variance, grid.mss] = sea;
         }
         self.grid = grid;
     }
@@ -287,16 +277,65 @@ pub(super) fn multipliers(lam: f64, kx: f64, kz: f64) -> [C32; 4] {
     .map(|m| C32::new(m.re as f32, m.im as f32))
 }
 
-/// Scales the derivative fields of [`multipliers`]' planes by `gain` (real and even in k, so
-/// each plane's pair of fields stays a pair of real fields): Dz's partner dh/dx in plane 1, and
-/// planes 2 and 3 whole; h, Dx and Dz keep their multipliers.
-#[inline]
-fn prefilter_slopes(m: &mut [C32; 4], gain: f32) {
-    // plane 1 is (Dz, dh/dx) = h~ (m_dz + i m_dhdx) with m_dz = i lambda uz and m_dhdx = i kx:
-    // its real part is dh/dx's
-    m[1].re *= gain;
-    m[2] *= gain;
-    m[3] *= gain;
+/// The gains of [`super::Interp::Prefiltered`] ([`Layer::set_prefilter`]), from each axis's
+/// phase step theta = 2 pi s / n of a wave of signed index s: what a bilinear read keeps of its
+/// power, T = (2 + cos theta) / 3, and what the difference across a cell keeps of its slope's,
+/// S = sinc^2(theta / 2).
+struct Prefilter {
+    theta: Vec<f64>,
+    read: Vec<f64>,
+    difference: Vec<f64>,
+}
+
+impl Prefilter {
+    fn new(n: usize) -> Prefilter {
+        let theta: Vec<f64> = (0..n)
+            .map(|i| TAU * signed_index(i, n) / n as f64)
+            .collect();
+        let read = theta
+            .iter()
+            .map(|&t| read_power_transfer(Interp::Bilinear, t))
+            .collect();
+        let difference = theta
+            .iter()
+            .map(|&t| {
+                let x = 0.5 * t;
+                if x == 0.0 { 1.0 } else { (x.sin() / x).powi(2) }
+            })
+            .collect();
+        Prefilter {
+            theta,
+            read,
+            difference,
+        }
+    }
+
+    /// Scales [`multipliers`]' planes for cell (ix, iz), each by a real gain even in k (so each
+    /// plane's pair of fields stays a pair of real fields). The five derivative fields, read
+    /// bilinearly by the normals, by 1 / sqrt(T_x T_z): the read keeps the wave's power. h, Dx
+    /// and Dz, whose bilinear blend is the surface the mesh and the exact intersector place,
+    /// by the gain g with which that blend's own slope keeps the wave's slope power,
+    /// g^2 (theta_x^2 S_x T_z + theta_z^2 T_x S_z) = theta_x^2 + theta_z^2 (the blend's x slope is
+    /// the difference across the cell blended along z, and the other way round).
+    #[inline]
+    fn apply(&self, m: &mut [C32; 4], ix: usize, iz: usize) {
+        let read = (1.0 / (self.read[ix] * self.read[iz]).sqrt()) as f32;
+        let (tx, tz) = (self.theta[ix], self.theta[iz]);
+        let slope = tx * tx * self.difference[ix] * self.read[iz]
+            + tz * tz * self.read[ix] * self.difference[iz];
+        let geometry = if slope > 0.0 {
+            ((tx * tx + tz * tz) / slope).sqrt() as f32
+        } else {
+            1.0
+        };
+        // plane 0 is (h, Dx); plane 1 is (Dz, dh/dx) = h~ (m_dz + i m_dhdx) with
+        // m_dz = i lambda uz and m_dhdx = i kx: its real part is dh/dx's, its imaginary Dz's
+        m[0] *= geometry;
+        m[1].re *= read;
+        m[1].im *= geometry;
+        m[2] *= read;
+        m[3] *= read;
+    }
 }
 
 /// Out-of-place transpose of an n x n matrix in row blocks, so reads stay in short runs (the

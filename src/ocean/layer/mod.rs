@@ -87,7 +87,8 @@ type C32 = Complex<f32>;
 /// while it runs, the means once it is done.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GridStats {
-    /// Mean of h^2 (the layer's variance over its period), m^2.
+    /// Mean of h^2 (the layer's variance over its period), m^2; with prefiltered fields, by
+    /// Parseval from the coefficients before the prefilter (the texels hold more).
     pub variance: f64,
     /// Mean of |grad h|^2 (the exact spectral gradients) of the sea: with prefiltered slope
     /// fields, by Parseval from the coefficients before the prefilter (the texels hold more).
@@ -142,9 +143,8 @@ pub struct Layer {
     /// Each field's correlations between neighbouring texels, for variance-preserving reads:
     /// computed on first use, forgotten when the fields change.
     lag_correlations: std::sync::OnceLock<LagCorrelations>,
-    /// Whether the derivative fields are prefiltered for bilinear reads
-    /// ([`Layer::set_slope_prefilter`]).
-    slope_prefilter: bool,
+    /// Whether the fields are prefiltered for bilinear reads ([`Layer::set_prefilter`]).
+    prefilter: bool,
     fft: Arc<dyn Fft<f32>>,
     inv_dx: f64,
 }
@@ -286,25 +286,26 @@ impl Layer {
             fields: Vec::new(),
             grid: GridStats::default(),
             lag_correlations: std::sync::OnceLock::new(),
-            slope_prefilter: false,
+            prefilter: false,
             fft,
             inv_dx: n as f64 / size_m,
         }
     }
 
-    /// Whether the next [`Layer::compute_fields`] prefilters the five derivative fields so
-    /// that a bilinear read keeps, on average over the positions between grid points, each
-    /// wave's power ([`super::Interp::Prefiltered`]): each wave's coefficient in them is
-    /// divided by sqrt(T(theta_x) T(theta_z)), with T = [`read_power_transfer`] of a bilinear
-    /// read. The heights and displacements stay the sea's own samples (Dz to the rounding of
-    /// the transform it shares with dh/dx).
-    pub fn set_slope_prefilter(&mut self, on: bool) {
-        self.slope_prefilter = on;
+    /// Whether the next [`Layer::compute_fields`] prefilters the fields for bilinear reads
+    /// ([`super::Interp::Prefiltered`]): each wave's coefficient in the five derivative fields is
+    /// divided by sqrt(T(theta_x) T(theta_z)), T = [`read_power_transfer`] of a bilinear read, so
+    /// that the read keeps, on average over the positions between grid points, the wave's slope
+    /// power; and in h, Dx and Dz multiplied by the gain with which the bilinear blend's own
+    /// slope keeps it (see `Prefilter` in `fields.rs`). The grid's variance and mean square
+    /// slope ([`GridStats`]) stay the sea's, from the coefficients before the gains.
+    pub fn set_prefilter(&mut self, on: bool) {
+        self.prefilter = on;
     }
 
-    /// See [`Layer::set_slope_prefilter`].
-    pub fn slope_prefilter(&self) -> bool {
-        self.slope_prefilter
+    /// See [`Layer::set_prefilter`].
+    pub fn prefilter(&self) -> bool {
+        self.prefilter
     }
 
     pub fn size_m(&self) -> f64 {

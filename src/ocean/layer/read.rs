@@ -104,7 +104,7 @@ fn catmull_rom(t: f32) -> [f32; 4] {
 /// waves average to zero, so a field read keeps the sum over its waves). A variance-preserving
 /// read rescales each field to its grid variance: 1 here, exact for the field's total, not
 /// wave by wave (it shifts power towards the shorter waves). A prefiltered read keeps each
-/// wave's power of the derivative fields it is used for: 1 ([`Layer::set_slope_prefilter`]).
+/// wave's power of the derivative fields it is used for: 1 ([`Layer::set_prefilter`]).
 pub fn read_power_transfer(interp: Interp, theta: f64) -> f64 {
     const GAUSS: [(f64, f64); 4] = [
         (0.069_431_844_202_973_7, 0.173_927_422_568_726_9),
@@ -149,6 +149,22 @@ impl Layer {
         let (t00, t10) = (self.texel(ix, iz), self.texel(ix + 1, iz));
         let (t01, t11) = (self.texel(ix, iz + 1), self.texel(ix + 1, iz + 1));
         blend([t00, t10, t01, t11], bilinear_weights(fx, fz))
+    }
+
+    /// The gradient (dh/dx, dh/dz) of the bilinear blend of h itself at grid coordinates
+    /// (px, pz) (wraps): along x the difference across the cell, blended along z, and the other
+    /// way round. The slope of the surface the exact intersector meets (over the undisplaced
+    /// plane), which keeps sinc^2(theta / 2) of a wave's slope power along its axis where a
+    /// bilinear read of the slope fields keeps (2 + cos theta) / 3.
+    #[inline]
+    pub fn surface_gradient(&self, px: f64, pz: f64) -> [f64; 2] {
+        let (ix, fx) = split(px);
+        let (iz, fz) = split(pz);
+        let h = |dx: i64, dz: i64| self.texel(ix + dx, iz + dz)[field::H] as f64;
+        let (fx, fz) = (fx as f64, fz as f64);
+        let ddx = (h(1, 0) - h(0, 0)) * (1.0 - fz) + (h(1, 1) - h(0, 1)) * fz;
+        let ddz = (h(0, 1) - h(0, 0)) * (1.0 - fx) + (h(1, 1) - h(1, 0)) * fx;
+        [ddx * self.inv_dx, ddz * self.inv_dx]
     }
 
     /// Adds the bilinear reads at the grid coordinates `(px[l], pz[l])` of the first `count`
