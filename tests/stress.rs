@@ -138,6 +138,40 @@ fn the_matrix_runs_on_the_exact_surface() {
     let _ = std::fs::remove_dir_all(out("exact"));
 }
 
+/// `--interp prefiltered`: every cell reads the prefiltered fields, and a subset passes on the
+/// mesh and on the exact surface (whose bounds are taken from the prefiltered texels).
+#[test]
+fn the_matrix_runs_with_prefiltered_reads() {
+    use vastocean::ocean::Interp;
+    for exact in [false, true] {
+        let name = if exact { "pre-exact" } else { "pre-mesh" };
+        let mut job = StressJob::quick(out(name));
+        job.reading(Interp::Prefiltered);
+        if exact {
+            job.on_exact_surface();
+        }
+        job.select(&[
+            "furnace".into(),
+            "period-multiple".into(),
+            "rust".into(),
+            "sun--10".into(),
+        ])
+        .unwrap();
+        for c in &mut job.cells {
+            assert_eq!(c.scene.ocean.interp, Interp::Prefiltered, "{}", c.name);
+            c.scene.camera.width = 48;
+            c.scene.render.spp = 2;
+        }
+        let r = run(&job).unwrap();
+        assert_eq!(r.cells, 6, "{r}");
+        assert_eq!(r.failed, 0, "{r}");
+        let get = |n: &str| r.results.iter().find(|c| c.name == n).unwrap();
+        assert_eq!(get("period-multiple").identical, Some(true));
+        assert!(get("furnace").max_luminance <= 1.0001 && get("furnace").max_luminance > 0.01);
+        let _ = std::fs::remove_dir_all(out(name));
+    }
+}
+
 /// Rays leaving exact hits tens of kilometres from a camera 10 km up clear the surface: the
 /// cell at its own size (smaller images miss the two paths that met it again when the offset
 /// trusted the normal from the f32 nominal position).

@@ -1,4 +1,4 @@
-//! `stress [--quick] [--json]`: the numerical-stability matrix (see `vastocean::app::stress`).
+//! `stress [--quick] [--interp I] [--json]`: the numerical-stability matrix (see `vastocean::app::stress`).
 
 use std::path::PathBuf;
 
@@ -22,6 +22,10 @@ pub struct StressArgs {
     /// paper-high, are left out; docs/exact.md).
     #[arg(long, value_parser = super::choice::<vastocean::config::SurfaceKind>(), default_value = "mesh")]
     surface: vastocean::config::SurfaceKind,
+    /// How every cell's ocean is read between grid points (docs/ocean.md, "Reading the
+    /// layers"); the exact surface takes bilinear or prefiltered.
+    #[arg(long, value_parser = super::choice::<vastocean::ocean::Interp>(), default_value_t = vastocean::ocean::Interp::default())]
+    interp: vastocean::ocean::Interp,
     /// Folder for stress.csv.
     #[arg(long, default_value = "out/stress")]
     out: PathBuf,
@@ -40,6 +44,7 @@ pub fn stress(a: StressArgs) -> Result<()> {
         StressJob::full(a.out)
     };
     job.progress = true;
+    job.reading(a.interp);
     if a.surface == vastocean::config::SurfaceKind::Exact {
         job.on_exact_surface();
     }

@@ -159,6 +159,13 @@ impl StressJob {
         }
     }
 
+    /// Every cell's ocean read with `interp` (`ocean.interp`; no cell sets its own).
+    pub fn reading(&mut self, interp: crate::ocean::Interp) {
+        for c in &mut self.cells {
+            c.scene.ocean.interp = interp;
+        }
+    }
+
     /// The quick matrix (256 px, 8 spp; paper-high left out): seconds on 2 cores.
     pub fn quick(out: PathBuf) -> StressJob {
         StressJob {
