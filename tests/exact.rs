@@ -169,10 +169,10 @@ fn exact_surface_refuses_vertex_normals_and_bicubic_reads() {
     assert!(e.contains("ocean.interp"), "{e}");
 }
 
-/// Prefiltered slope fields leave the heights and displacements the bounds cover as they are:
-/// the exact surface reads them, with no NaN, hole or self-hit.
+/// The exact surface reads prefiltered fields, its bounds taken from the prefiltered texels,
+/// with no NaN, hole or self-hit.
 #[test]
-fn an_exact_render_reads_prefiltered_slopes() {
+fn an_exact_render_reads_prefiltered_fields() {
     let mut cfg = small_scene(SurfaceKind::Exact);
     cfg.ocean.interp = vastocean::ocean::Interp::Prefiltered;
     cfg.validate().unwrap();

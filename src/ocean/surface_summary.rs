@@ -59,15 +59,18 @@ pub struct LayerSummary {
     pub spectrum_rms_m: f64,
     pub realization_rms_m: f64,
     /// Mean square slope |grad h|^2: the integral of k^2 over the layer's share of the
-    /// (scaled) spectrum; over the grid points (the realization's exact gradients); and as the
-    /// renderer reads it between them (the surface's interpolation, at random points).
+    /// (scaled) spectrum; over the grid points (the realization's exact gradients; for
+    /// prefiltered layers by Parseval from the coefficients before the prefilter, the sea's and
+    /// not the texels'); and as the renderer reads it between them (the surface's
+    /// interpolation, at random points).
     pub mss_spectrum: f64,
     pub mss_grid: f64,
     pub mss_lookup: f64,
     /// The mean square slope of the layer's bilinear height surface itself (its own gradient,
     /// what the exact surface's tangent plane sees), same points.
     pub mss_surface: f64,
-    /// Where this layer alone folds.
+    /// Where this layer alone folds, at its texels (for a prefiltered layer, of its
+    /// prefiltered strains).
     pub folded_fraction: f64,
 }
 

@@ -368,7 +368,10 @@ impl Layer {
         &self.grid
     }
 
-    /// Fraction of grid points where this layer alone folds (J <= 0).
+    /// Fraction of grid points where this layer alone folds (J <= 0), from its texels: for a
+    /// prefiltered layer, of the prefiltered strains, which fold more often than the sea's
+    /// (the summed surface's share, [`crate::ocean::Surface::folded_fraction`], is read between
+    /// the grid points as a render reads it).
     pub fn folded_fraction(&self) -> f64 {
         let folded = self.fields.iter().filter(|t| jacobian(t) <= 0.0).count();
         folded as f64 / self.fields.len() as f64

@@ -104,7 +104,8 @@ fn catmull_rom(t: f32) -> [f32; 4] {
 /// waves average to zero, so a field read keeps the sum over its waves). A variance-preserving
 /// read rescales each field to its grid variance: 1 here, exact for the field's total, not
 /// wave by wave (it shifts power towards the shorter waves). A prefiltered read keeps each
-/// wave's power of the derivative fields it is used for: 1 ([`Layer::set_prefilter`]).
+/// wave's power of the derivative fields, the only ones this is used for: 1
+/// ([`Layer::set_prefilter`]; its heights keep more than 1, by design of their own gain).
 pub fn read_power_transfer(interp: Interp, theta: f64) -> f64 {
     const GAUSS: [(f64, f64); 4] = [
         (0.069_431_844_202_973_7, 0.173_927_422_568_726_9),
