@@ -115,7 +115,8 @@ pub struct OceanSummary {
     pub mss_lookup: f64,
     /// The same of the summed bilinear height surface's own gradient: the slopes of the surface
     /// the exact intersector meets, which `compare --against truth` shades with its tangent
-    /// plane (whatever `interp` the normals read).
+    /// plane (of the sea's own heights with bilinear reads, of the prefiltered ones with
+    /// prefiltered reads).
     pub mss_surface: f64,
     /// The largest wavenumber any layer holds, rad/m: the spectrum's cut-off (shorter waves,
     /// the capillaries among them, are not in the surface).
