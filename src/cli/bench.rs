@@ -34,6 +34,11 @@ pub enum BenchCommand {
         /// unless its file says otherwise; docs/accuracy.md, "The wrong-side policy").
         #[arg(long, value_parser = super::choice::<vastocean::config::WrongSide>())]
         wrong_side: Option<vastocean::config::WrongSide>,
+        /// How every render of the sweep and its reference reads the ocean's layers (default:
+        /// the scene's, prefiltered unless its file says otherwise; docs/ocean.md, "Reading the
+        /// layers").
+        #[arg(long, value_parser = super::choice::<vastocean::ocean::Interp>())]
+        interp: Option<vastocean::ocean::Interp>,
         /// Worker threads (0 = all cores).
         #[arg(long, default_value_t = 0, value_parser = super::threads_arg)]
         threads: usize,
@@ -63,13 +68,14 @@ pub enum BenchCommand {
 pub fn run(c: BenchCommand) -> Result<()> {
     match c {
         #[rustfmt::skip]
-        BenchCommand::Accuracy { out, config, quick, filtered, wrong_side, threads, json } => {
+        BenchCommand::Accuracy { out, config, quick, filtered, wrong_side, interp, threads, json } => {
             let mut scene = match &config {
                 Some(path) => SceneConfig::load(path).map_err(AppError::from)?,
                 None => app::bench::accuracy::AccuracyJob::default_scene(),
             };
             scene.render.threads = threads;
             scene.render.wrong_side = wrong_side.unwrap_or(scene.render.wrong_side);
+            scene.ocean.interp = interp.unwrap_or(scene.ocean.interp);
             let mut job = if quick {
                 app::bench::accuracy::AccuracyJob::quick(scene, out)
             } else {

@@ -51,6 +51,9 @@ pub enum StudyCommand {
         /// (default terminate, as `compare --wrong-side`).
         #[arg(long, value_parser = choice::<WrongSide>())]
         wrong_side: Option<WrongSide>,
+        /// How every case reads the ocean's layers (default prefiltered, as `compare --interp`).
+        #[arg(long, value_parser = choice::<vastocean::ocean::Interp>())]
+        interp: Option<vastocean::ocean::Interp>,
         /// Clip every sky's sun at this multiple of the sky's median luminance, as the paper's
         /// photographs clipped theirs (sky.clip_relative in each case's scene).
         #[arg(long)]
@@ -132,6 +135,7 @@ pub fn run(c: StudyCommand) -> Result<()> {
             high_near_size,
             low_near_size,
             wrong_side,
+            interp,
             clip_sun,
             max_boost,
             realizations,
@@ -153,6 +157,7 @@ pub fn run(c: StudyCommand) -> Result<()> {
             base.camera.width = width.unwrap_or(base.camera.width);
             base.render.spp = spp.unwrap_or(base.render.spp);
             base.render.wrong_side = wrong_side.unwrap_or(base.render.wrong_side);
+            base.ocean.interp = interp.unwrap_or(base.ocean.interp);
             base.sky.clip_relative = clip_sun.or(base.sky.clip_relative);
             let job = app::study::PlanJob {
                 out,

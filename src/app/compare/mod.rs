@@ -222,6 +222,8 @@ pub struct CompareSummary {
     /// Where the samples went: the pilot, the boosted pixels, the cost.
     pub sampling: SamplingReport,
     pub wrong_side: crate::config::WrongSide,
+    /// How every scenario (and the truth) reads the ocean's layers.
+    pub interp: crate::ocean::Interp,
     /// Every scenario against the baseline: per-row and band estimates with intervals.
     pub estimates: Estimates,
     pub improvement: RatioEstimate,
@@ -479,6 +481,7 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
         spp: job.scene.render.spp,
         sampling,
         wrong_side: job.scene.render.wrong_side,
+        interp: job.scene.ocean.interp,
         scenarios: runs.into_iter().map(|(info, _)| info).collect(),
         estimates,
         improvement,

@@ -230,6 +230,8 @@ pub struct AccuracyReport {
     pub rows_deg: (f64, f64),
     /// The wrong-side policy of every render, the reference's included.
     pub wrong_side: crate::config::WrongSide,
+    /// How every render, the reference's included, reads the ocean's layers.
+    pub interp: crate::ocean::Interp,
     /// Oceans built: one, which every tessellation and the reference render.
     pub oceans_built: usize,
     pub seconds_total: f64,

@@ -110,6 +110,7 @@ pub(super) fn write(
         front,
         width: job.width,
         wrong_side: job.scene.render.wrong_side,
+        interp: job.scene.ocean.interp,
         oceans_built,
         rows_deg: ROWS,
         seconds_total: t0.elapsed().as_secs_f64(),
@@ -127,9 +128,10 @@ impl fmt::Display for AccuracyReport {
         let r = &self.reference;
         writeln!(
             f,
-            "speed / accuracy at {} px, wrong-side policy {}, against {} mapped at {} spp over rows {} to {} degrees ({} triangles; its noise {:.2e}, {:.0}% of the smallest error{})",
+            "speed / accuracy at {} px, wrong-side policy {}, {} reads, against {} mapped at {} spp over rows {} to {} degrees ({} triangles; its noise {:.2e}, {:.0}% of the smallest error{})",
             self.width,
             self.wrong_side,
+            self.interp,
             r.lod,
             r.spp,
             self.rows_deg.0,
