@@ -121,11 +121,14 @@ impl super::Remarks for OceanReport {
                 r.max
             ));
         }
+        notes.extend(crate::render::report::fold_note(
+            self.summary.folded_fraction,
+        ));
         notes
     }
     fn warnings(&self) -> Vec<String> {
         let mut w = Vec::new();
-        if self.summary.folded_fraction > 0.0 {
+        if self.summary.folded_fraction >= crate::render::report::FOLD_WARNING {
             w.push(format!(
                 "{:.3}% of the surface folds over itself (Jacobian <= 0); lower --choppiness to avoid it",
                 100.0 * self.summary.folded_fraction

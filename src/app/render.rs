@@ -138,6 +138,7 @@ impl super::Remarks for RenderReport {
     fn notes(&self) -> Vec<String> {
         super::sea_state_note(&self.ocean_notes)
             .into_iter()
+            .chain(crate::render::report::fold_note(self.folded_fraction))
             .collect()
     }
     fn warnings(&self) -> Vec<String> {

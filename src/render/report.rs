@@ -132,10 +132,27 @@ pub struct Rendered {
     pub aovs: super::aov::AovLayers,
 }
 
-/// What a render warns of: the sea state's validity, folding and holes.
+/// A folded share below this is noted, not warned of: a few of the 512^2 points the estimate
+/// reads, at the steepest crests of a steep sea (reads that keep the sea's slopes, prefiltered
+/// or bicubic, find them on the paper's case 50 where bilinear reads smooth them away), too
+/// few for an image to show or for lowering the choppiness to be worth it.
+pub const FOLD_WARNING: f64 = 1e-4;
+
+/// The note a surface that folds below [`FOLD_WARNING`] gets.
+pub fn fold_note(folded_fraction: f64) -> Option<String> {
+    (folded_fraction > 0.0 && folded_fraction < FOLD_WARNING).then(|| {
+        format!(
+            "{:.4}% of the sea surface folds over itself (Jacobian <= 0) at its steepest crests, less than the {:.2}% an image could show",
+            100.0 * folded_fraction,
+            100.0 * FOLD_WARNING
+        )
+    })
+}
+
+/// What a render warns of: folding from [`FOLD_WARNING`] up, and holes.
 pub fn warnings(folded_fraction: f64, escaped_below_horizon: u64) -> Vec<String> {
     let mut w = Vec::new();
-    if folded_fraction > 0.0 {
+    if folded_fraction >= FOLD_WARNING {
         w.push(format!(
             "{:.3}% of the sea surface folds over itself (Jacobian <= 0); lower ocean.choppiness to avoid it",
             100.0 * folded_fraction
@@ -157,4 +174,22 @@ pub fn mean_luminance(img: &crate::image_io::RgbImage) -> f64 {
         .map(|&p| crate::color::luminance(p) as f64)
         .sum();
     (sum / img.pixels.len().max(1) as f64).max(1e-30)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_fold_below_the_warning_is_noted_and_from_it_warned_of() {
+        assert_eq!(fold_note(0.0), None);
+        assert!(warnings(0.0, 0).is_empty());
+        // case 50's prefiltered sea: 2 of the 512^2 points
+        let few = 2.0 / (512.0 * 512.0);
+        assert!(fold_note(few).unwrap().contains("0.0008%"));
+        assert!(warnings(few, 0).is_empty());
+        assert_eq!(fold_note(FOLD_WARNING), None);
+        let w = warnings(FOLD_WARNING, 0);
+        assert!(w.len() == 1 && w[0].contains("folds over itself"), "{w:?}");
+    }
 }
