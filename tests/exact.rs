@@ -169,12 +169,13 @@ fn exact_surface_refuses_vertex_normals_and_bicubic_reads() {
     assert!(e.contains("ocean.interp"), "{e}");
 }
 
-/// The exact surface reads prefiltered fields, its bounds taken from the prefiltered texels,
-/// with no NaN, hole or self-hit.
+/// The exact surface reads the paper's bilinear fields as well as the default prefiltered ones
+/// (its bounds taken from the texels either way), with no NaN, hole or self-hit.
 #[test]
-fn an_exact_render_reads_prefiltered_fields() {
+fn an_exact_render_reads_bilinear_fields() {
     let mut cfg = small_scene(SurfaceKind::Exact);
-    cfg.ocean.interp = vastocean::ocean::Interp::Prefiltered;
+    assert_ne!(cfg.ocean.interp, vastocean::ocean::Interp::Bilinear);
+    cfg.ocean.interp = vastocean::ocean::Interp::Bilinear;
     cfg.validate().unwrap();
     let pre = vastocean::render::pipeline::render_scene(&cfg, false)
         .unwrap()

@@ -144,20 +144,29 @@ fn small_subset_passes(mut job: StressJob, name: &str) {
     let _ = std::fs::remove_dir_all(out(name));
 }
 
-/// `--interp prefiltered`: every cell reads the prefiltered fields, and a subset passes on the
-/// mesh and on the exact surface (whose bounds are taken from the prefiltered texels).
+/// `--interp bilinear` (the paper's read; the default is prefiltered): every cell reads the
+/// sea's own samples, and a subset passes on the mesh and on the exact surface.
 #[test]
-fn the_matrix_runs_with_prefiltered_reads() {
+fn the_matrix_runs_with_bilinear_reads() {
     use vastocean::ocean::Interp;
+    assert_ne!(
+        Interp::default(),
+        Interp::Bilinear,
+        "the default cells cover it already"
+    );
     for exact in [false, true] {
-        let name = if exact { "pre-exact" } else { "pre-mesh" };
+        let name = if exact {
+            "bilinear-exact"
+        } else {
+            "bilinear-mesh"
+        };
         let mut job = StressJob::quick(out(name));
-        job.reading(Interp::Prefiltered);
+        job.reading(Interp::Bilinear);
         if exact {
             job.on_exact_surface();
         }
         for c in &job.cells {
-            assert_eq!(c.scene.ocean.interp, Interp::Prefiltered, "{}", c.name);
+            assert_eq!(c.scene.ocean.interp, Interp::Bilinear, "{}", c.name);
         }
         small_subset_passes(job, name);
     }

@@ -72,8 +72,8 @@ pub struct SceneFlags {
     #[arg(long, value_parser = choice::<vastocean::config::WrongSide>())]
     wrong_side: Option<vastocean::config::WrongSide>,
     /// How the ocean's layers are read between their grid points, for the mapped normals and the
-    /// mesh's vertices: bilinear (the paper's, the default), prefiltered (bilinear, of fields
-    /// prefiltered so the normals and the surface keep the spectrum's slopes), bicubic, or
+    /// mesh's vertices: prefiltered (the default: bilinear reads of fields prefiltered so the
+    /// normals and the surface keep the spectrum's slopes), bilinear (the paper's), bicubic, or
     /// variance-preserving (docs/ocean.md, "Reading the layers").
     #[arg(long, value_parser = choice::<vastocean::ocean::Interp>())]
     interp: Option<vastocean::ocean::Interp>,

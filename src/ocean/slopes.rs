@@ -258,8 +258,14 @@ mod tests {
     use super::*;
     use crate::ocean::OceanParams;
 
+    /// The default sea with the texels holding its own samples, which Parseval's sums are
+    /// (the prefiltered default scales them).
     fn surface() -> Surface {
-        Surface::new(&OceanParams::default(), 1).unwrap()
+        let p = OceanParams {
+            interp: crate::ocean::Interp::Bilinear,
+            ..OceanParams::default()
+        };
+        Surface::new(&p, 1).unwrap()
     }
 
     #[test]
