@@ -509,5 +509,8 @@ use summary::Sampled;
 pub use summary::{LayerSummary, OceanSummary, PartitionSummary};
 
 #[cfg(test)]
+#[path = "surface_stats_tests.rs"]
+mod stats_tests;
+#[cfg(test)]
 #[path = "surface_tests.rs"]
 mod tests;
