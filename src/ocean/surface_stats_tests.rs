@@ -10,9 +10,9 @@ use crate::ocean::{LayerSpec, SpreadingKind};
 #[test]
 fn target_rms_is_hit() {
     // The earlier default layers (fine grids): the interpolated surface has the target RMS.
-    // With the default overlapping layers the realization does too, but bilinear reads of the
-    // 10.3 and 12.7 km layers (8-10 texels per peak wavelength) lose ~5 % of it between texels
-    // (docs/ocean.md).
+    // With the default overlapping layers the realization does too, but reads of the 10.3 and
+    // 12.7 km layers (8-10 texels per peak wavelength) lose some of it between texels: ~5 %
+    // bilinear, ~2 % with the default prefiltered read (docs/ocean.md).
     for (base, sampled_tolerance) in [
         (OceanParams::tiling_layers(), 0.01),
         (OceanParams::default(), 0.06),
