@@ -134,15 +134,15 @@ pub struct Rendered {
 
 /// A folded share below this is noted, not warned of: a few of the 512^2 points the estimate
 /// reads, at the steepest crests of a steep sea (reads that keep the sea's slopes, prefiltered
-/// or bicubic, find them on the paper's case 50 where bilinear reads smooth them away), too
-/// few for an image to show or for lowering the choppiness to be worth it.
+/// or bicubic, find them on the paper's case 50 where bilinear reads smooth them away). The
+/// threshold is a judgement, not a measured visibility: a hundredth of a per cent of the sea.
 pub const FOLD_WARNING: f64 = 1e-4;
 
 /// The note a surface that folds below [`FOLD_WARNING`] gets.
 pub fn fold_note(folded_fraction: f64) -> Option<String> {
     (folded_fraction > 0.0 && folded_fraction < FOLD_WARNING).then(|| {
         format!(
-            "{:.4}% of the sea surface folds over itself (Jacobian <= 0) at its steepest crests, less than the {:.2}% an image could show",
+            "{:.4}% of the sea surface folds over itself (Jacobian <= 0) at its steepest crests, below the {:.2}% from which a render warns of it",
             100.0 * folded_fraction,
             100.0 * FOLD_WARNING
         )
