@@ -54,6 +54,7 @@ use crate::ocean::Sampler;
 
 pub use crate::config::lod::{Pattern, Reading};
 
+pub(crate) use earth::atan_over_arg;
 pub use earth::{curved_frame_point, curved_frame_position, horizon_distance};
 
 /// Default earth radius, m (mean radius).

@@ -11,7 +11,7 @@
 //! layers' exact FFT derivatives of the displacement), from the last point's x shifted by the
 //! change in s (a ray's next point is close to its last).
 
-use crate::lod::curved_frame_position;
+use crate::lod::{atan_over_arg, curved_frame_position};
 use crate::ocean::{Sampler, field};
 
 /// Newton steps before an inversion gives up (it then answers with the last point reached and
@@ -21,7 +21,7 @@ const MAX_NEWTON: usize = 24;
 pub(super) const TOL_S: f64 = 1e-7;
 
 /// Arc position s and altitude a of the point `p` over a sphere of radius `r` centred at
-/// (0, -r, 0). The altitude is computed as (|P - C|^2 - r^2) / (|P - C| + r), free of the
+/// (0, -r, 0) (`p` not at the centre). The altitude is computed as (|P - C|^2 - r^2) / (|P - C| + r), free of the
 /// cancellation of |P - C| - r.
 #[inline]
 pub(super) fn sphere_coords(p: [f64; 3], r: f64) -> ([f64; 2], f64) {
@@ -30,14 +30,15 @@ pub(super) fn sphere_coords(p: [f64; 3], r: f64) -> ([f64; 2], f64) {
     let h2 = x * x + z * z;
     let rho = (h2 + yc * yc).sqrt();
     let alt = (h2 + p[1] * (p[1] + 2.0 * r)) / (rho + r);
-    let rh = h2.sqrt();
-    let s = if rh > 0.0 {
-        let k = r * rh.atan2(yc) / rh;
-        [x * k, z * k]
+    // s = r atan(rh / yc) along (x, z) / rh, rh the distance from the axis: with u = rh / yc,
+    // r atan(u) / (u yc), a series in u^2 where the angle is small (no sqrt, no atan2)
+    let k = if yc > 0.0 {
+        r / yc * atan_over_arg(h2 / (yc * yc))
     } else {
-        [0.0, 0.0]
+        let rh = h2.sqrt();
+        if rh > 0.0 { r * rh.atan2(yc) / rh } else { 0.0 }
     };
-    (s, alt)
+    ([x * k, z * k], alt)
 }
 
 /// Where the last evaluation along a ray found the surface: its arc position and nominal x.
