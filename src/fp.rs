@@ -45,6 +45,14 @@ pub fn offset_ray_origin(p: Vec3, p_err: Vec3, n: Vec3, w: Vec3) -> Vec3 {
     }))
 }
 
+/// floor(p) as an integer, for |p| < 2^53 (a NaN gives 0): truncation plus a correction,
+/// since `f64::floor` is a libm call on baseline x86-64 (no SSE4.1 `roundsd`).
+#[inline]
+pub fn floor_i64(p: f64) -> i64 {
+    let i = p as i64;
+    if (i as f64) > p { i - 1 } else { i }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -76,6 +84,25 @@ mod tests {
                 let want = w.dot(n).signum() as f64;
                 assert!(side * want > 0.0, "case {i}: w {w} side {side}");
             }
+        }
+    }
+
+    #[test]
+    fn floor_i64_is_floor() {
+        for p in [
+            -2.5,
+            -2.0,
+            -1e-300,
+            -0.0,
+            0.0,
+            1e-300,
+            0.999_999,
+            1.0,
+            7.5,
+            -1e15 - 0.5,
+            4e15,
+        ] {
+            assert_eq!(floor_i64(p), p.floor() as i64, "{p}");
         }
     }
 

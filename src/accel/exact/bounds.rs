@@ -17,6 +17,7 @@
 
 use rayon::prelude::*;
 
+use crate::fp::floor_i64;
 use crate::ocean::{Layer, Sampler, field};
 
 /// What a pyramid keeps per block of texels, and how two blocks join.
@@ -76,12 +77,15 @@ impl Block for Disp {
 struct Levels<T> {
     /// `levels[l - 1]`: (n >> l)^2 cells, z-major.
     levels: Vec<Vec<T>>,
+    /// n >> 1, the side of level 1 in blocks.
+    side1: usize,
     /// The whole layer's.
     global: T,
 }
 
 impl<T: Block> Levels<T> {
     fn new(level1: Vec<T>) -> Levels<T> {
+        let side1 = (level1.len() as f64).sqrt() as usize;
         let mut levels = vec![level1];
         while levels.last().map_or(0, |l| l.len()) > 1 {
             let prev = levels.last().expect("a level");
@@ -99,7 +103,11 @@ impl<T: Block> Levels<T> {
             levels.push(next);
         }
         let global = levels.last().expect("a level")[0];
-        Levels { levels, global }
+        Levels {
+            levels,
+            side1,
+            global,
+        }
     }
 
     /// The join over the blocks of `level` from (jx0, jz0) to (jx1, jz1) (at most two on each
@@ -110,7 +118,7 @@ impl<T: Block> Levels<T> {
             return self.global;
         }
         let cells = &self.levels[level - 1];
-        let side = (cells.len() as f64).sqrt() as usize;
+        let side = self.side1 >> (level - 1);
         let mask = side as i64 - 1;
         let at = |x: i64, z: i64| cells[(z & mask) as usize * side + (x & mask) as usize];
         let mut b = at(jx0, jz0);
@@ -278,22 +286,33 @@ impl Pyramid {
     /// `[x0, x1] x [z0, z1]` touches (level 0: the whole layer).
     #[inline]
     fn blocks(&self, x0: f64, x1: f64, z0: f64, z1: f64) -> Blocks {
+        let p = [
+            self.origin[0] + x0 * self.inv_dx,
+            self.origin[0] + x1 * self.inv_dx,
+            self.origin[1] + z0 * self.inv_dx,
+            self.origin[1] + z1 * self.inv_dx,
+        ];
+        // (NaN fails the test too)
+        if !p.iter().all(|v| v.abs() < 1e15) {
+            return (0, [0; 2], [0; 2]);
+        }
         // the texels the reads touch: floor(p0) ..= floor(p1) + 1 on each axis
-        let ix0 = (self.origin[0] + x0 * self.inv_dx).floor();
-        let ix1 = (self.origin[0] + x1 * self.inv_dx).floor() + 1.0;
-        let iz0 = (self.origin[1] + z0 * self.inv_dx).floor();
-        let iz1 = (self.origin[1] + z1 * self.inv_dx).floor() + 1.0;
-        let span = (ix1 - ix0).max(iz1 - iz0) + 1.0;
-        if span.is_nan() || span >= (self.n / 2) as f64 {
+        let [ix0, ix1, iz0, iz1] = p.map(floor_i64);
+        let (ix1, iz1) = (ix1 + 1, iz1 + 1);
+        let span = (ix1 - ix0).max(iz1 - iz0) + 1;
+        if span >= (self.n / 2) as i64 {
             return (0, [0; 2], [0; 2]);
         }
         // the smallest level whose blocks are at least `span` texels: the range then meets at
         // most two blocks on each axis
-        let level = (span as u64).next_power_of_two().trailing_zeros().max(1) as usize;
+        let level = (span.max(1) as u64)
+            .next_power_of_two()
+            .trailing_zeros()
+            .max(1) as usize;
         (
             level,
-            [(ix0 as i64) >> level, (ix1 as i64) >> level],
-            [(iz0 as i64) >> level, (iz1 as i64) >> level],
+            [ix0 >> level, ix1 >> level],
+            [iz0 >> level, iz1 >> level],
         )
     }
 }

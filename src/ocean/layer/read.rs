@@ -60,9 +60,7 @@ fn blend(t: [&Texel; 4], w: [f32; 4]) -> Texel {
 
 #[inline]
 pub(super) fn split(p: f64) -> (i64, f32) {
-    // truncation plus correction: floor() is a libm call on baseline x86-64
-    let i = p as i64;
-    let i = if (i as f64) > p { i - 1 } else { i };
+    let i = crate::fp::floor_i64(p);
     (i, (p - i as f64) as f32)
 }
 
