@@ -200,59 +200,82 @@ impl Pyramid {
     fn new(layer: &Layer, origin: [f64; 2]) -> (Pyramid, LayerLimits) {
         let n = layer.n();
         let t = layer.fields();
-        let h = |ix: usize, iz: usize| t[(iz % n) * n + ix % n][field::H];
-        // level 1 straight from the texels, with the limits in the same pass
+        // (a layer's side is a power of two: neighbours wrap with a mask)
+        let mask = n - 1;
+        // level 1 straight from the texels, with the limits in the same pass; the differences
+        // are taken in f32 as the texels hold them and divided by dx once per block (the
+        // division and the rounding up are monotone, so the largest quotient is the quotient
+        // of the largest difference)
         let half = n / 2;
         let dx = layer.dx();
-        type Row = (Vec<[f32; 2]>, Vec<Steep>, Vec<Disp>, LayerLimits);
+        // rounded up, so that the f32 block still bounds the f64 figure
+        let up = |v: f32| (v as f64 / dx * (1.0 + 1e-6)) as f32;
+        // max and min as one compare each (f32::max's NaN rules cost several instructions; the
+        // accumulator is never NaN, and a NaN texel leaves it as f32::max would)
+        let mx = |m: f32, v: f32| if v > m { v } else { m };
+        let mn = |m: f32, v: f32| if v < m { v } else { m };
+        type Row = (Vec<[f32; 2]>, Vec<Steep>, Vec<Disp>, [f32; 7]);
         let rows: Vec<Row> = (0..half)
             .into_par_iter()
             .map(|jz| {
-                let (inf, ninf) = (f32::INFINITY, f32::NEG_INFINITY);
-                let mut row = vec![[inf, ninf]; half];
-                let mut steep_row = vec![Steep::default(); half];
-                let mut disp_row = vec![Disp([inf, ninf, inf, ninf]); half];
-                let mut lim = LayerLimits::default();
-                let cells = row.iter_mut().zip(&mut steep_row).zip(&mut disp_row);
-                for (jx, ((cell, steep), disp)) in cells.enumerate() {
+                let mut row = Vec::with_capacity(half);
+                let mut steep_row = Vec::with_capacity(half);
+                let mut disp_row = Vec::with_capacity(half);
+                // the row's largest |h|, |Dx|, |Dz|, h difference, dDx/dx, dDz/dz and
+                // off-diagonal difference
+                let mut lim = [0.0f32; 7];
+                for jx in 0..half {
+                    let (inf, ninf) = (f32::INFINITY, f32::NEG_INFINITY);
+                    let (mut hr, mut dr) = ([inf, ninf], [inf, ninf, inf, ninf]);
+                    // steepest h difference, dDx/dx, dDz/dz, off-diagonal
+                    let mut s = [0.0f32; 4];
                     for (ix, iz) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
                         let (x, z) = (2 * jx + ix, 2 * jz + iz);
-                        let v = h(x, z);
-                        let tx = &t[z * n + x];
-                        let right = &t[z * n + (x + 1) % n];
-                        let below = &t[((z + 1) % n) * n + x];
-                        lim.height = lim.height.max(v.abs() as f64);
-                        lim.disp[0] = lim.disp[0].max(tx[field::DX].abs() as f64);
-                        lim.disp[1] = lim.disp[1].max(tx[field::DZ].abs() as f64);
-                        let dh = (right[field::H] - v).abs().max((below[field::H] - v).abs());
-                        let slope = dh as f64 / dx;
-                        lim.slope = lim.slope.max(slope);
-                        let strain = [
-                            (right[field::DX] - tx[field::DX]).abs(),
-                            (below[field::DZ] - tx[field::DZ]).abs(),
-                            (below[field::DX] - tx[field::DX])
-                                .abs()
-                                .max((right[field::DZ] - tx[field::DZ]).abs()),
-                        ]
-                        .map(|s| s as f64 / dx);
-                        for (m, s) in lim.strain.iter_mut().zip(strain) {
-                            *m = m.max(s);
+                        let c = &t[z * n + x];
+                        let r = &t[z * n + ((x + 1) & mask)];
+                        let b = &t[((z + 1) & mask) * n + x];
+                        let v = c[field::H];
+                        let (ddx, ddz) = (c[field::DX], c[field::DZ]);
+                        hr = [mn(hr[0], v), mx(hr[1], v)];
+                        dr = [
+                            mn(dr[0], ddx),
+                            mx(dr[1], ddx),
+                            mn(dr[2], ddz),
+                            mx(dr[3], ddz),
+                        ];
+                        let diff = [
+                            mx((r[field::H] - v).abs(), (b[field::H] - v).abs()),
+                            (r[field::DX] - ddx).abs(),
+                            (b[field::DZ] - ddz).abs(),
+                            mx((b[field::DX] - ddx).abs(), (r[field::DZ] - ddz).abs()),
+                        ];
+                        for (m, d) in s.iter_mut().zip(diff) {
+                            *m = mx(*m, d);
                         }
-                        // rounded up, so that the f32 block still bounds the f64 figure
-                        let up = |v: f64| (v * (1.0 + 1e-6)) as f32;
-                        *cell = cell.join([v, v]);
-                        let (ddx, ddz) = (tx[field::DX], tx[field::DZ]);
-                        *disp = disp.join(Disp([ddx, ddx, ddz, ddz]));
-                        *steep = steep.join(Steep {
-                            slope: up(slope),
-                            strain: [up(strain[0].max(strain[1])), up(strain[2])],
-                        });
+                    }
+                    row.push(hr);
+                    disp_row.push(Disp(dr));
+                    steep_row.push(Steep {
+                        slope: up(s[0]),
+                        strain: [up(mx(s[1], s[2])), up(s[3])],
+                    });
+                    let block = [
+                        mx(hr[0].abs(), hr[1].abs()),
+                        mx(dr[0].abs(), dr[1].abs()),
+                        mx(dr[2].abs(), dr[3].abs()),
+                        s[0],
+                        s[1],
+                        s[2],
+                        s[3],
+                    ];
+                    for (m, b) in lim.iter_mut().zip(block) {
+                        *m = mx(*m, b);
                     }
                 }
                 (row, steep_row, disp_row, lim)
             })
             .collect();
-        let mut limits = LayerLimits::default();
+        let mut lim = [0.0f32; 7];
         let mut level1 = Vec::with_capacity(half * half);
         let mut steep1 = Vec::with_capacity(half * half);
         let mut disp1 = Vec::with_capacity(half * half);
@@ -260,15 +283,16 @@ impl Pyramid {
             level1.extend(row);
             steep1.extend(steep_row);
             disp1.extend(disp_row);
-            limits.height = limits.height.max(l.height);
-            limits.slope = limits.slope.max(l.slope);
-            for k in 0..3 {
-                limits.strain[k] = limits.strain[k].max(l.strain[k]);
-            }
-            for k in 0..2 {
-                limits.disp[k] = limits.disp[k].max(l.disp[k]);
+            for (m, v) in lim.iter_mut().zip(l) {
+                *m = m.max(v);
             }
         }
+        let limits = LayerLimits {
+            disp: [lim[1] as f64, lim[2] as f64],
+            height: lim[0] as f64,
+            slope: lim[3] as f64 / dx,
+            strain: [lim[4] as f64 / dx, lim[5] as f64 / dx, lim[6] as f64 / dx],
+        };
         (
             Pyramid {
                 n,
