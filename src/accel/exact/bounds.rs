@@ -33,12 +33,12 @@ impl Block for [f32; 2] {
     }
 }
 
-/// The largest neighbour differences over dx that start at a block's texels: of h (per axis),
-/// and of the displacement on the strain's diagonal (dDx/dx, dDz/dz) and off it (dDx/dz,
-/// dDz/dx).
+/// The largest neighbour differences over dx that start at a block's texels: of h along x and
+/// along z, and of the displacement on the strain's diagonal (dDx/dx, dDz/dz) and off it
+/// (dDx/dz, dDz/dx).
 #[derive(Clone, Copy, Debug, Default)]
 struct Steep {
-    slope: f32,
+    slope: [f32; 2],
     strain: [f32; 2],
 }
 
@@ -46,7 +46,7 @@ impl Block for Steep {
     #[inline]
     fn join(self, o: Self) -> Self {
         Steep {
-            slope: self.slope.max(o.slope),
+            slope: [self.slope[0].max(o.slope[0]), self.slope[1].max(o.slope[1])],
             strain: [
                 self.strain[0].max(o.strain[0]),
                 self.strain[1].max(o.strain[1]),
@@ -155,23 +155,67 @@ struct Pyramid {
     disp: Levels<Disp>,
 }
 
-/// The layers' slope and strain bounds over a box of nominal positions, summed.
+/// Slope and strain bounds of the summed surface over a box of nominal positions (or the whole
+/// sea).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Steepness {
-    /// The sum of the layers' steepest neighbour differences of h over dx (per axis).
-    pub slope: f64,
-    /// The sum of the layers' strain bounds (largest diagonal plus largest off-diagonal).
+    /// Bounds on |dh/dx| and |dh/dz| of the bilinear surface: the sum of the layers' steepest
+    /// neighbour differences of h over dx along each axis.
+    pub slope: [f64; 2],
+    /// A bound on the strain S = dD/dx's norm (S is symmetric, so its largest row sum bounds
+    /// it, Gershgorin): summed per layer over a box, the sea's own for the whole sea.
     pub strain: f64,
 }
 
 impl Steepness {
-    /// The steepest slope of the summed surface over the box, as a height over arc position
-    /// (as [`SurfaceBounds::slope_limit`], from the box's own texels); `None` where the strain
-    /// bound reaches 0.95. The box is to hold every nominal position whose surface point lies
-    /// over the arc positions in question (the search's `nominal_box`), and there the map
-    /// x -> x + D is one to one (its strain is below 1 on a convex set).
-    pub fn slope_limit(&self) -> Option<f64> {
-        (self.strain < 0.95).then(|| std::f64::consts::SQRT_2 * self.slope / (1.0 - self.strain))
+    /// The tighter of two bounds on the same surface: each holds, so their smaller parts do.
+    pub fn min(self, o: Steepness) -> Steepness {
+        Steepness {
+            slope: [self.slope[0].min(o.slope[0]), self.slope[1].min(o.slope[1])],
+            strain: self.strain.min(o.strain),
+        }
+    }
+
+    /// How fast the surface's height can change with arc position over the box; `None` where
+    /// the strain bound reaches 0.95. The box is to hold every nominal position whose surface
+    /// point lies over the arc positions in question (the search's `nominal_box`), and there
+    /// the map x -> x + D is one to one (its strain is below 1 on a convex set).
+    pub fn slope_limit(&self) -> Option<SlopeBound> {
+        let [gx, gz] = self.slope;
+        let s = self.strain;
+        (s < 0.95).then(|| {
+            let g = gx.hypot(gz);
+            SlopeBound {
+                axis: self.slope,
+                skew: g * s / (1.0 - s),
+                norm: g / (1.0 - s),
+            }
+        })
+    }
+}
+
+/// How fast the summed surface's height H(s) = h(x(s)) can change with arc position s, where
+/// s = x + D(x). Along an arc velocity v, dH = grad h . w with w = (I + S)^-1 v, so w = v - S w,
+/// |w| <= |v| / (1 - |S|) and |w - v| <= |S| |v| / (1 - |S|): hence
+/// |dH| <= gx |vx| + gz |vz| + |g| |S| / (1 - |S|) |v|, never more than |g| |v| / (1 - |S|).
+/// Along the waves' crests (long-crested seas) the first term is what the slope across them
+/// leaves out.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct SlopeBound {
+    /// Bounds on |dh/dx| and |dh/dz|.
+    pub axis: [f64; 2],
+    /// |g| |S| / (1 - |S|): what the map from nominal to arc position adds per unit of speed.
+    pub skew: f64,
+    /// The steepest slope in any direction, |g| / (1 - |S|).
+    pub norm: f64,
+}
+
+impl SlopeBound {
+    /// A bound on |dH/dt| for an arc velocity whose components are at most `vx` and `vz` and
+    /// whose length is at most `v`.
+    #[inline]
+    pub fn rate(&self, vx: f64, vz: f64, v: f64) -> f64 {
+        self.axis[0] * vx + self.axis[1] * vz + self.skew * v
     }
 }
 
@@ -182,9 +226,9 @@ pub(super) struct LayerLimits {
     pub disp: [f64; 2],
     /// Largest |h|, m.
     pub height: f64,
-    /// Steepest slope of the bilinear surface: the largest difference of h between
-    /// neighbouring texels over dx.
-    pub slope: f64,
+    /// Steepest slopes of the bilinear surface along x and z: the largest difference of h
+    /// between neighbouring texels along each axis, over dx.
+    pub slope: [f64; 2],
     /// Largest |dDx/dx|, |dDz/dz| and |dDx/dz|, |dDz/dx| of the bilinear surface, from
     /// neighbour differences of the displacement.
     pub strain: [f64; 3],
@@ -214,21 +258,21 @@ impl Pyramid {
         // accumulator is never NaN, and a NaN texel leaves it as f32::max would)
         let mx = |m: f32, v: f32| if v > m { v } else { m };
         let mn = |m: f32, v: f32| if v < m { v } else { m };
-        type Row = (Vec<[f32; 2]>, Vec<Steep>, Vec<Disp>, [f32; 7]);
+        type Row = (Vec<[f32; 2]>, Vec<Steep>, Vec<Disp>, [f32; 8]);
         let rows: Vec<Row> = (0..half)
             .into_par_iter()
             .map(|jz| {
                 let mut row = Vec::with_capacity(half);
                 let mut steep_row = Vec::with_capacity(half);
                 let mut disp_row = Vec::with_capacity(half);
-                // the row's largest |h|, |Dx|, |Dz|, h difference, dDx/dx, dDz/dz and
-                // off-diagonal difference
-                let mut lim = [0.0f32; 7];
+                // the row's largest |h|, |Dx|, |Dz|, h differences along x and z, dDx/dx,
+                // dDz/dz and off-diagonal difference
+                let mut lim = [0.0f32; 8];
                 for jx in 0..half {
                     let (inf, ninf) = (f32::INFINITY, f32::NEG_INFINITY);
                     let (mut hr, mut dr) = ([inf, ninf], [inf, ninf, inf, ninf]);
-                    // steepest h difference, dDx/dx, dDz/dz, off-diagonal
-                    let mut s = [0.0f32; 4];
+                    // steepest h difference along x and z, dDx/dx, dDz/dz, off-diagonal
+                    let mut s = [0.0f32; 5];
                     for (ix, iz) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
                         let (x, z) = (2 * jx + ix, 2 * jz + iz);
                         let c = &t[z * n + x];
@@ -244,7 +288,8 @@ impl Pyramid {
                             mx(dr[3], ddz),
                         ];
                         let diff = [
-                            mx((r[field::H] - v).abs(), (b[field::H] - v).abs()),
+                            (r[field::H] - v).abs(),
+                            (b[field::H] - v).abs(),
                             (r[field::DX] - ddx).abs(),
                             (b[field::DZ] - ddz).abs(),
                             mx((b[field::DX] - ddx).abs(), (r[field::DZ] - ddz).abs()),
@@ -256,8 +301,8 @@ impl Pyramid {
                     row.push(hr);
                     disp_row.push(Disp(dr));
                     steep_row.push(Steep {
-                        slope: up(s[0]),
-                        strain: [up(mx(s[1], s[2])), up(s[3])],
+                        slope: [up(s[0]), up(s[1])],
+                        strain: [up(mx(s[2], s[3])), up(s[4])],
                     });
                     let block = [
                         mx(hr[0].abs(), hr[1].abs()),
@@ -267,6 +312,7 @@ impl Pyramid {
                         s[1],
                         s[2],
                         s[3],
+                        s[4],
                     ];
                     for (m, b) in lim.iter_mut().zip(block) {
                         *m = mx(*m, b);
@@ -275,7 +321,7 @@ impl Pyramid {
                 (row, steep_row, disp_row, lim)
             })
             .collect();
-        let mut lim = [0.0f32; 7];
+        let mut lim = [0.0f32; 8];
         let mut level1 = Vec::with_capacity(half * half);
         let mut steep1 = Vec::with_capacity(half * half);
         let mut disp1 = Vec::with_capacity(half * half);
@@ -290,8 +336,8 @@ impl Pyramid {
         let limits = LayerLimits {
             disp: [lim[1] as f64, lim[2] as f64],
             height: lim[0] as f64,
-            slope: lim[3] as f64 / dx,
-            strain: [lim[4] as f64 / dx, lim[5] as f64 / dx, lim[6] as f64 / dx],
+            slope: [lim[3] as f64 / dx, lim[4] as f64 / dx],
+            strain: [lim[5] as f64 / dx, lim[6] as f64 / dx, lim[7] as f64 / dx],
         };
         (
             Pyramid {
@@ -374,11 +420,12 @@ impl SurfaceBounds {
     /// `[x0, x1] x [z0, z1]`.
     #[inline]
     pub fn steepness(&self, x0: f64, x1: f64, z0: f64, z1: f64) -> Steepness {
-        let (mut slope, mut strain) = (0.0, 0.0);
+        let (mut slope, mut strain) = ([0.0; 2], 0.0);
         for p in &self.pyramids {
             let q = p.steep.get(p.blocks(x0, x1, z0, z1));
             // each layer's Gershgorin norm; their sum bounds the summed strain's
-            slope += q.slope as f64;
+            slope[0] += q.slope[0] as f64;
+            slope[1] += q.slope[1] as f64;
             strain += q.strain[0] as f64 + q.strain[1] as f64;
         }
         Steepness { slope, strain }
@@ -416,16 +463,18 @@ impl SurfaceBounds {
         self.limits.iter().map(|l| l.height).sum()
     }
 
-    /// The steepest slope of the summed surface as a height over arc position: the bilinear
-    /// slope bound (per axis, so sqrt 2 for the gradient) over the least stretch of the
-    /// horizontal map x -> x + D, 1 - |S| for its strain S = dD/dx, with |S| at most the
-    /// largest diagonal bound plus the off-diagonal one (Gershgorin). `None` where that reaches
-    /// 0.95 (the bound does not prove the surface is a height field).
-    pub fn slope_limit(&self) -> Option<f64> {
-        let slope: f64 = self.limits.iter().map(|l| l.slope).sum();
+    /// The whole sea's slope and strain bounds: each axis's bilinear slope bound summed over
+    /// the layers, and the summed strain's Gershgorin bound (the largest summed diagonal bound
+    /// plus the summed off-diagonal one), which is tighter than a sum of the layers' norms.
+    /// Its [`Steepness::slope_limit`] is `None` where the strain bound reaches 0.95 (the bound
+    /// does not prove the surface is a height field).
+    pub fn sea_steepness(&self) -> Steepness {
+        let slope = std::array::from_fn(|k| self.limits.iter().map(|l| l.slope[k]).sum());
         let s: [f64; 3] = std::array::from_fn(|k| self.limits.iter().map(|l| l.strain[k]).sum());
-        let norm = s[0].max(s[1]) + s[2];
-        (norm < 0.95).then(|| std::f64::consts::SQRT_2 * slope / (1.0 - norm))
+        Steepness {
+            slope,
+            strain: s[0].max(s[1]) + s[2],
+        }
     }
 
     /// Bytes of the pyramids.
@@ -473,10 +522,13 @@ mod tests {
                         let v = c[field::H];
                         assert!(h[0] <= v && v <= h[1], "h {v} outside {h:?}");
                         let d = |a: &[f32; 8], k: usize| ((a[k] - c[k]).abs() as f64 / dx) as f32;
-                        let slope = d(r, field::H).max(d(b, field::H));
+                        let slope = [d(r, field::H), d(b, field::H)];
                         let diag = d(r, field::DX).max(d(b, field::DZ));
                         let off = d(b, field::DX).max(d(r, field::DZ));
-                        assert!(slope <= steep.slope, "{slope} > {steep:?}");
+                        assert!(
+                            slope[0] <= steep.slope[0] && slope[1] <= steep.slope[1],
+                            "{slope:?} > {steep:?}"
+                        );
                         assert!(
                             diag <= steep.strain[0] && off <= steep.strain[1],
                             "{steep:?}"

@@ -29,7 +29,7 @@ use super::bvh::BoxTree;
 use super::{Accel, Hit, Ray};
 use crate::mesh::Mesh;
 use crate::ocean::{Interp, Surface};
-use bounds::SurfaceBounds;
+use bounds::{SlopeBound, Steepness, SurfaceBounds};
 use implicit::Implicit;
 
 /// The displaced surface of an ocean around one camera origin, with the bounds the intersector
@@ -46,8 +46,10 @@ pub struct ExactSurface {
     /// How far above h a surface point's altitude can be: |D|^2 / 2R (the displacement is
     /// tangent to the sphere at its base), m.
     altitude_slack: f64,
-    /// The surface's slope bound (height over arc position), if the strain bound proves one.
-    slope: Option<f64>,
+    /// The whole sea's slope and strain bounds ...
+    steep: Steepness,
+    /// ... and its slope bound (height over arc position), if the strain bound proves one.
+    slope: Option<SlopeBound>,
     /// Segments are halved down to this length (arc), m: below the widening by the
     /// displacement, the bounds narrow slowly.
     split_m: f64,
@@ -86,7 +88,8 @@ impl ExactSurface {
             .fold(f64::INFINITY, f64::min);
         Ok(ExactSurface {
             altitude_slack: (disp[0] * disp[0] + disp[1] * disp[1]) / earth_radius_m + 1e-6,
-            slope: bounds.slope_limit(),
+            steep: bounds.sea_steepness(),
+            slope: bounds.sea_steepness().slope_limit(),
             split_m: disp[0].max(disp[1]).max(8.0 * finest),
             split_rough_m: 8.0 * finest,
             floor_m: 0.5 * finest,
@@ -103,7 +106,7 @@ impl ExactSurface {
         Implicit {
             sampler: self.ocean.sampler(self.origin),
             earth_radius_m: self.earth_radius_m,
-            lip: self.slope.map_or(f64::INFINITY, |s| 1.0 + s),
+            lip: self.slope.map_or(f64::INFINITY, |s| 1.0 + s.norm),
         }
     }
 
@@ -113,7 +116,7 @@ impl ExactSurface {
     /// doubled for room. The integrator offsets rays leaving an exact hit by this much more
     /// than a triangle hit's.
     pub fn hit_error_m(&self) -> f32 {
-        let lip = 1.0 + self.slope.unwrap_or(10.0);
+        let lip = 1.0 + self.slope.map_or(10.0, |s| s.norm);
         (2.0 * (search::TOL_F + lip * implicit::TOL_S + 1e-6 * self.bounds.height_limit())) as f32
     }
 

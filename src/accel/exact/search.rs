@@ -16,6 +16,7 @@
 //! root, which the Illinois variant of false position narrows to [`TOL_F`].
 
 use super::ExactSurface;
+use super::bounds::SlopeBound;
 use super::implicit::{Eval, Implicit, Warm, sphere_coords};
 
 /// |F| at which a root is accepted, m: part of the error the hit point carries into the
@@ -105,11 +106,9 @@ impl ExactSurface {
                 None
             } else {
                 let [x0, x1, z0, z1] = area;
+                // (the box's and the sea's bounds both hold there: so do their smaller parts)
                 let local = self.bounds.steepness(x0, x1, z0, z1);
-                match (local.slope_limit(), self.slope) {
-                    (Some(l), Some(g)) => Some(l.min(g)),
-                    (l, g) => l.or(g),
-                }
+                local.min(self.steep).slope_limit()
             };
             if halve && (ds > self.split_m || slope.is_none()) {
                 let m = ray.end(0.5 * (a.t + b.t));
@@ -241,15 +240,21 @@ impl ExactSurface {
         mut e: Eval,
         t_end: f64,
         theta: f64,
-        slope: Option<f64>,
+        slope: Option<SlopeBound>,
     ) -> Result<(f64, [f64; 2]), Eval> {
         let floor = self.floor_m / ray.len;
-        // |dF/dt| <= |da/dt| + slope |ds/dt|: the altitude and the arc position move with the
+        // |dF/dt| <= |da/dt| + |dH/dt|: the altitude and the arc position s move with the
         // ray's vertical and horizontal parts, each leaking into the other by the tilt from
-        // the nadir (sin theta, with room for the segment's own reach)
+        // the nadir (sin theta, with room for the segment's own reach and the sphere's
+        // stretch of s), so |ds/dt| <= dh + leak dv and each of ds/dt's components is within
+        // leak (dh + dv) of the ray's own along that axis
         let (dv, dh) = (ray.d[1].abs(), ray.d[0].hypot(ray.d[2]));
         let leak = 1.01 * theta + 1e-3;
-        let k = slope.map(|s| 1.01 * (dv + leak * dh + s * (dh + leak * dv)) + 1e-9);
+        let spill = leak * (dh + dv);
+        let k = slope.map(|s| {
+            let (vx, vz) = (ray.d[0].abs() + spill, ray.d[2].abs() + spill);
+            1.01 * (dv + leak * dh + s.rate(vx, vz, dh + leak * dv)) + 1e-9
+        });
         while t < t_end {
             // (F is known to a tenth of itself while it is far from zero; an inversion that did
             // not converge certifies nothing)

@@ -108,9 +108,17 @@ fn local_slope_and_strain_bounds_hold_every_secant_in_the_box() {
     let sampler = ocean.sampler(origin);
     let b = SurfaceBounds::new(&sampler);
     let global = b.steepness(-1e6, 1e6, -1e6, 1e6);
-    let global_limit = b.slope_limit().expect("the test sea has a slope bound");
+    let sea = b.sea_steepness();
+    let global_limit = sea
+        .slope_limit()
+        .expect("the test sea has a slope bound")
+        .norm;
     // summed per layer, the strain's Gershgorin bound is never tighter than the sea's own
-    assert!(global.slope_limit().expect("bounded") >= global_limit);
+    assert!(global.slope_limit().expect("bounded").norm >= global_limit);
+    // (the pyramids' f32 blocks are rounded up by 1e-6)
+    for (g, s) in global.slope.iter().zip(sea.slope) {
+        assert!(*g >= s && *g <= s * (1.0 + 2e-6), "{g} {s}");
+    }
     let mut rng = Rng::keyed(&[4]);
     let mut lower = 0;
     const EPS: f64 = 1e-3;
@@ -119,11 +127,18 @@ fn local_slope_and_strain_bounds_hold_every_secant_in_the_box() {
         let size = 0.01 * 300f64.powf(rng.f64()); // 1 cm to 3 m
         let (x1, z1) = (x0 + size, z0 + size);
         let local = b.steepness(x0, x1, z0, z1);
-        assert!(local.slope <= global.slope && local.strain <= global.strain);
+        assert!(local.slope[0] <= global.slope[0] && local.slope[1] <= global.slope[1]);
+        assert!(local.strain <= global.strain);
+        // the box's bound, and one over a centimetre more on each side for the arc-position
+        // secants below (their paths in nominal position stray a little from their ends)
         let limit = local
             .slope_limit()
             .expect("the test sea's strain is below 0.95");
-        lower += usize::from(limit < 0.5 * global_limit);
+        lower += usize::from(limit.norm < 0.5 * global_limit);
+        let wide = b
+            .steepness(x0 - 0.01, x1 + 0.01, z0 - 0.01, z1 + 0.01)
+            .slope_limit()
+            .expect("bounded");
         for _ in 0..40 {
             let x = x0 + (x1 - x0 - EPS) * rng.f64();
             let z = z0 + (z1 - z0 - EPS) * rng.f64();
@@ -134,9 +149,21 @@ fn local_slope_and_strain_bounds_hold_every_secant_in_the_box() {
             // f32 texels: differences over 1 mm carry their rounding, ~1e-7 m / 1e-3 m
             let tol = 1e-2;
             assert!(
-                hx.abs().max(hz.abs()) <= local.slope + tol,
+                hx.abs() <= local.slope[0] + tol && hz.abs() <= local.slope[1] + tol,
                 "{hx} {hz} {local:?}"
             );
+            // H(s) = h(x(s)), s = x + D(x): between two surface points 1 mm apart in a random
+            // direction, the change of h is within the directional bound of the change of s
+            let (ux, uz) = (rng.f64() * std::f64::consts::TAU).sin_cos();
+            let far = f(x + EPS * ux, z + EPS * uz);
+            let ds = [
+                EPS * ux + far[field::DX] - c[field::DX],
+                EPS * uz + far[field::DZ] - c[field::DZ],
+            ];
+            let dh = (far[field::H] - c[field::H]).abs();
+            let bound = wide.rate(ds[0].abs(), ds[1].abs(), ds[0].hypot(ds[1]));
+            assert!(dh <= bound + tol * EPS, "{dh} > {bound} {wide:?}");
+            assert!(bound <= wide.norm * ds[0].hypot(ds[1]) * (1.0 + 1e-12));
             let s = [
                 [d(&right, field::DX), d(&below, field::DX)],
                 [d(&right, field::DZ), d(&below, field::DZ)],
