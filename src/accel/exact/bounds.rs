@@ -254,8 +254,8 @@ impl Pyramid {
         let dx = layer.dx();
         // rounded up, so that the f32 block still bounds the f64 figure
         let up = |v: f32| (v as f64 / dx * (1.0 + 1e-6)) as f32;
-        // max and min as one compare each (f32::max's NaN rules cost several instructions; the
-        // accumulator is never NaN, and a NaN texel leaves it as f32::max would)
+        // max and min as one compare each (f32::max's NaN rules cost several instructions;
+        // the fields hold no NaN, and a NaN difference would be dropped, not kept)
         let mx = |m: f32, v: f32| if v > m { v } else { m };
         let mn = |m: f32, v: f32| if v < m { v } else { m };
         type Row = (Vec<[f32; 2]>, Vec<Steep>, Vec<Disp>, [f32; 8]);

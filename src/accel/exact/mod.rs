@@ -29,7 +29,7 @@ use super::bvh::BoxTree;
 use super::{Accel, Hit, Ray};
 use crate::mesh::Mesh;
 use crate::ocean::{Interp, Surface};
-use bounds::{SlopeBound, Steepness, SurfaceBounds};
+use bounds::{Steepness, SurfaceBounds};
 use implicit::Implicit;
 
 /// The displaced surface of an ocean around one camera origin, with the bounds the intersector
@@ -46,10 +46,11 @@ pub struct ExactSurface {
     /// How far above h a surface point's altitude can be: |D|^2 / 2R (the displacement is
     /// tangent to the sphere at its base), m.
     altitude_slack: f64,
-    /// The whole sea's slope and strain bounds ...
+    /// The whole sea's slope and strain bounds.
     steep: Steepness,
-    /// ... and its slope bound (height over arc position), if the strain bound proves one.
-    slope: Option<SlopeBound>,
+    /// Its steepest slope in any direction (height over arc position, [`bounds::SlopeBound::norm`]),
+    /// if the strain bound proves one.
+    slope: Option<f64>,
     /// Segments are halved down to this length (arc), m: below the widening by the
     /// displacement, the bounds narrow slowly.
     split_m: f64,
@@ -78,6 +79,7 @@ impl ExactSurface {
             ));
         }
         let bounds = SurfaceBounds::new(&ocean.sampler(origin));
+        let steep = bounds.sea_steepness();
         let disp = bounds.disp();
         let h = bounds.height_limit();
         let disp_norm = (disp[0] * disp[0] + disp[1] * disp[1] + h * h).sqrt();
@@ -88,8 +90,8 @@ impl ExactSurface {
             .fold(f64::INFINITY, f64::min);
         Ok(ExactSurface {
             altitude_slack: (disp[0] * disp[0] + disp[1] * disp[1]) / earth_radius_m + 1e-6,
-            steep: bounds.sea_steepness(),
-            slope: bounds.sea_steepness().slope_limit(),
+            steep,
+            slope: steep.slope_limit().map(|s| s.norm),
             split_m: disp[0].max(disp[1]).max(8.0 * finest),
             split_rough_m: 8.0 * finest,
             floor_m: 0.5 * finest,
@@ -106,7 +108,7 @@ impl ExactSurface {
         Implicit {
             sampler: self.ocean.sampler(self.origin),
             earth_radius_m: self.earth_radius_m,
-            lip: self.slope.map_or(f64::INFINITY, |s| 1.0 + s.norm),
+            lip: self.slope.map_or(f64::INFINITY, |s| 1.0 + s),
         }
     }
 
@@ -116,7 +118,7 @@ impl ExactSurface {
     /// doubled for room. The integrator offsets rays leaving an exact hit by this much more
     /// than a triangle hit's.
     pub fn hit_error_m(&self) -> f32 {
-        let lip = 1.0 + self.slope.map_or(10.0, |s| s.norm);
+        let lip = 1.0 + self.slope.unwrap_or(10.0);
         (2.0 * (search::TOL_F + lip * implicit::TOL_S + 1e-6 * self.bounds.height_limit())) as f32
     }
 

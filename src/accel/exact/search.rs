@@ -9,8 +9,8 @@
 //! [`ExactSurface::nominal_box`]). Segments that are not cleared are halved until they are
 //! shorter than [`ExactSurface::split_m`] (or, where neither the box's nor the sea's slope
 //! bound holds, [`ExactSurface::split_rough_m`]), then marched: from a point where F = f, the
-//! surface cannot be reached before |f| / K, K = (1 + slope bound) |d| bounding dF/dt, so that
-//! step is taken when it is longer than the floor (half the finest texel), and the floor
+//! surface cannot be reached before |f| / K, K bounding dF/dt from the ray's speeds and the
+//! directional slope bound ([`super::bounds::SlopeBound`]), so that step is taken when it is longer than the floor (half the finest texel), and the floor
 //! otherwise. The floor is what the march does not certify: a crest the ray clips over less
 //! than the floor (both crossings between two points) is not seen. A sign change brackets a
 //! root, which the Illinois variant of false position narrows to [`TOL_F`].
