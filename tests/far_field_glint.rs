@@ -323,3 +323,27 @@ fn a_sky_maps_sun_is_sampled_too() {
     check(&cfg);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn the_mapped_lobe_glitter_near_the_horizon_under_terminate() {
+    // A sun 8 degrees up and the camera 33 degrees down: the glitter lies 3 to 14 degrees below
+    // the horizon, where a fifth of the normals the lobe draws (under the default `terminate`)
+    // face away from the ray and end their paths. The normals that reflect the sun all face
+    // it, so the glitter keeps its closed form: the sun's samples stand for the whole lobe,
+    // whatever becomes of the normal drawn beside them.
+    let mut cfg = scene(FilterLobe::Mapped, 16);
+    assert_eq!(
+        cfg.render.wrong_side,
+        vastocean::config::WrongSide::Terminate
+    );
+    if let AnalyticSky::HandMadeClear {
+        sun_elevation_deg, ..
+    } = &mut cfg.sky.analytic
+    {
+        *sun_elevation_deg = 8.0;
+    }
+    if let vastocean::config::Projection::Pinhole { pitch_deg, .. } = &mut cfg.camera.projection {
+        *pitch_deg = -33.0;
+    }
+    check(&cfg);
+}

@@ -164,6 +164,11 @@ impl SceneRef<'_> {
         if dead {
             c.terminated += 1;
             s.refracted = Some(None);
+            // The sun's samples stand for the whole lobe, whose normals that reflect the sun
+            // all face the ray: a drawn normal facing away ends its own branches, not them.
+            if let Some(lobe) = area_lobe {
+                self.sample_sun_area(&mut s, &lobe, d, ng, None, shading, settings, rng, c);
+            }
             return s;
         }
         // Around the normal the policy left.
