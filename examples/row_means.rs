@@ -1,6 +1,7 @@
 //! Two renders of the same band, row by row: each row's mean luminance in A and B, their
 //! difference, its standard error from the renders' own `Y.variance` (pixels independent), and
-//! the band 0 to 5 degrees below the horizon as a whole. How docs/filtered.md compares filtered
+//! the band 0 to 5 degrees below the horizon as a whole, and every row below the horizon (the
+//! whole sea, each pixel weighted by its solid angle). How docs/filtered.md compares filtered
 //! and mapped normals:
 //!
 //! ```text
@@ -35,6 +36,8 @@ fn main() {
         .expect("ROW0: the band's first full-sphere row");
     let lum = |p: [f32; 3]| vastocean::color::luminance(p) as f64;
     let (mut sa, mut sb, mut sva, mut svb, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    // the sea: rows below the horizon, weighted by cos(elevation) (a pixel's solid angle)
+    let (mut ea, mut eb, mut eva, mut evb, mut en) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for y in 0..h {
         let el = 90.0 - (row0 + y as f64 + 0.5) * 180.0 / full_h as f64;
         let (mut ma, mut mb, mut vva, mut vvb) = (0.0, 0.0, 0.0, 0.0);
@@ -55,6 +58,14 @@ fn main() {
             (mb - ma) / se,
             100.0 * (mb - ma) / ma
         );
+        if el < 0.0 {
+            let c = el.to_radians().cos();
+            ea += c * ma;
+            eb += c * mb;
+            eva += c * c * vva / (wf * wf);
+            evb += c * c * vvb / (wf * wf);
+            en += c;
+        }
         if el < 0.0 && el > -5.0 {
             sa += ma;
             sb += mb;
@@ -73,4 +84,16 @@ fn main() {
         (sb - sa) / n / se,
         100.0 * (sb - sa) / sa
     );
+    if en > 0.0 {
+        let se = (eva + evb).sqrt() / en;
+        println!(
+            "sea:       a {:.5} b {:.5} diff {:+.5} se {:.5} z {:+.2} rel {:+.3}%",
+            ea / en,
+            eb / en,
+            (eb - ea) / en,
+            se,
+            (eb - ea) / en / se,
+            100.0 * (eb - ea) / ea
+        );
+    }
 }

@@ -413,7 +413,7 @@ fn ocean_splits_its_slopes_for_a_footprint_as_filtered_normals_do() {
     // in between the resolved share falls with the width, and the two always sum to the
     // realization's slopes (the grid's, by Parseval).
     let (grid, none) = split(0.0);
-    assert!(none.unresolved_mss.abs() < 1e-12 && none.layers.iter().all(|l| l.weight == 1.0));
+    assert!(none.unresolved_mss.abs() < 1e-12 && none.layers.iter().all(|l| l.level == 0.0));
     let mut last = none.resolved_mss;
     for w in [0.1, 1.0, 10.0, 1000.0] {
         let (_, fp) = split(w);

@@ -8,6 +8,7 @@ use serde::Serialize;
 
 use super::AppError;
 use crate::ocean::repeat::{RepeatCorrelation, profile_csv, repeat_correlation};
+use crate::ocean::slopes::NOT_READ;
 use crate::ocean::{OceanParams, OceanSummary, Surface, write_preview_png};
 
 /// An ocean job.
@@ -39,8 +40,9 @@ pub struct FootprintSlopes {
 /// One layer's share of [`FootprintSlopes`].
 #[derive(Clone, Debug, Serialize)]
 pub struct LayerSplit {
-    /// The factor its fields are read with (0: not read at all).
-    pub weight: f64,
+    /// Which of its low-passed levels the resolved waves are read from: 0 its own texels, l
+    /// its l-th level, a fraction a blend of two, one past the last level not read at all.
+    pub level: f64,
     pub resolved_mss: f64,
     pub unresolved_mss: f64,
 }
@@ -56,14 +58,19 @@ impl FootprintSlopes {
         let layers: Vec<LayerSplit> = slopes
             .layers()
             .iter()
-            .zip(split.weights)
-            .map(|(bands, w)| {
-                let [xx, _, zz] = bands.total();
-                let resolved = (w as f64).powi(2) * (xx + zz);
+            .zip(split.levels.iter().zip(split.blend))
+            .map(|(l, (&level, blend))| {
+                let [xx, _, zz] = l.total();
+                let (level, blend) = if level == NOT_READ {
+                    (l.levels() + 1, 0.0)
+                } else {
+                    (level as usize, blend)
+                };
+                let [u, _, v] = l.unresolved(level, blend as f64);
                 LayerSplit {
-                    weight: w as f64,
-                    resolved_mss: resolved,
-                    unresolved_mss: xx + zz - resolved,
+                    level: level as f64 + blend as f64,
+                    resolved_mss: xx + zz - (u + v),
+                    unresolved_mss: u + v,
                 }
             })
             .collect();
@@ -271,8 +278,8 @@ impl fmt::Display for OceanReport {
             for (i, l) in fp.layers.iter().enumerate() {
                 writeln!(
                     f,
-                    "    layer {i}: {:.5} resolved, {:.5} in the lobe (fields read x {:.3})",
-                    l.resolved_mss, l.unresolved_mss, l.weight
+                    "    layer {i}: {:.5} resolved, {:.5} in the lobe (read from level {:.2})",
+                    l.resolved_mss, l.unresolved_mss, l.level
                 )?;
             }
         }

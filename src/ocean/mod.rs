@@ -7,6 +7,7 @@
 //! [`preview`] draws it from above.
 
 pub mod layer;
+pub mod levels;
 pub mod preview;
 pub mod repeat;
 pub mod slopes;

@@ -20,6 +20,7 @@ use std::time::Instant;
 use super::layer::{
     FIELD_COUNT, FieldPlanes, Layer, SLOPES, Slopes, Texel, add_texel, field, slopes,
 };
+use super::levels::Levels;
 use super::slopes::{SlopeSource, SurfaceSlopes};
 use super::spectrum::Spectrum;
 use super::{Interp, MAX_LAYERS, OceanError, OceanParams};
@@ -40,6 +41,9 @@ pub struct Surface {
     slopes: OnceLock<SurfaceSlopes>,
     /// [`Surface::read_slopes`], likewise.
     read_slopes: OnceLock<SurfaceSlopes>,
+    /// [`Surface::levels`], built on first use (what filtered normals read) and kept until the
+    /// time changes.
+    levels: OnceLock<Levels>,
     /// [`Surface::summary`], computed on first use (62 ms for the default ocean: band integrals
     /// of the spectrum and passes over every texel) and kept until the time changes.
     summary: OnceLock<OceanSummary>,
@@ -88,7 +92,7 @@ impl Sample {
 
 /// The unit normal of eq. 7 and the Jacobian J from the summed derivative fields.
 #[inline]
-fn normal_from_slopes(g: Slopes) -> ([f32; 3], f32) {
+pub(super) fn normal_from_slopes(g: Slopes) -> ([f32; 3], f32) {
     let at = |f: usize| g[f - SLOPES.start];
     let (hx, hz) = (at(field::DH_DX), at(field::DH_DZ));
     let (a, c) = (1.0 + at(field::DDX_DX), 1.0 + at(field::DDZ_DZ));
@@ -108,10 +112,12 @@ fn normal_from_slopes(g: Slopes) -> ([f32; 3], f32) {
 /// Reads a [`Surface`] around one camera origin. Cheap to copy; one per thread is fine.
 #[derive(Clone, Copy)]
 pub struct Sampler<'a> {
-    layers: &'a [Layer],
+    pub(super) layers: &'a [Layer],
     /// Per layer: the origin modulo the layer's extent, in grid units.
-    origin: [[f64; 2]; MAX_LAYERS],
-    interp: Interp,
+    pub(super) origin: [[f64; 2]; MAX_LAYERS],
+    pub(super) interp: Interp,
+    /// The layers' low-passed levels, which filtered normals read ([`Sampler::with_levels`]).
+    pub(super) levels: Option<&'a Levels>,
 }
 
 impl Sampler<'_> {
@@ -149,57 +155,17 @@ impl Sampler<'_> {
             let (now, rest) = uv.split_at(k);
             let (into, rest_out) = std::mem::take(&mut out).split_at_mut(k);
             if k > 4 {
-                self.normals_in_lanes::<8>(now, None, into);
+                self.normals_in_lanes::<8>(now, into);
             } else {
-                self.normals_in_lanes::<4>(now, None, into);
+                self.normals_in_lanes::<4>(now, into);
             }
             (uv, out) = (rest, rest_out);
         }
     }
 
-    /// The unit normals at the points `uv` of the surface whose layers are scaled by
-    /// `weights[i]` at point i (filtered normals: each layer's resolved share, see
-    /// [`crate::ocean::slopes`]). A layer whose weight is zero at every point of a batch of
-    /// eight is not read. With every weight 1, bit for bit [`Sampler::normals`].
-    pub fn normals_weighted(
-        &self,
-        uv: &[[f32; 2]],
-        weights: &[[f32; MAX_LAYERS]],
-        out: &mut [[f32; 3]],
-    ) {
-        assert!(
-            uv.len() == out.len() && weights.len() == uv.len(),
-            "one normal per point"
-        );
-        for ((uv, w), out) in uv.chunks(8).zip(weights.chunks(8)).zip(out.chunks_mut(8)) {
-            if self.interp == Interp::Bicubic {
-                for ((n, &[u, v]), w) in out.iter_mut().zip(uv).zip(w) {
-                    let mut f = [0.0f32; FIELD_COUNT];
-                    for ((layer, o), &w) in self.layers.iter().zip(&self.origin).zip(w) {
-                        if w != 0.0 {
-                            let px = o[0] + u as f64 * layer.inv_dx();
-                            let pz = o[1] + v as f64 * layer.inv_dx();
-                            let t = layer.read(px, pz, self.interp).map(|x| x * w);
-                            add_texel(&mut f, &t);
-                        }
-                    }
-                    *n = normal_from_slopes(slopes(&f)).0;
-                }
-            } else {
-                self.normals_in_lanes::<8>(uv, Some(w), out);
-            }
-        }
-    }
-
-    /// [`Sampler::normals`] of up to `LANES` points, bilinear or variance-preserving, the
-    /// layers scaled by `weights` when given.
+    /// [`Sampler::normals`] of up to `LANES` points, bilinear or variance-preserving.
     #[inline]
-    fn normals_in_lanes<const LANES: usize>(
-        &self,
-        uv: &[[f32; 2]],
-        weights: Option<&[[f32; MAX_LAYERS]]>,
-        out: &mut [[f32; 3]],
-    ) {
+    fn normals_in_lanes<const LANES: usize>(&self, uv: &[[f32; 2]], out: &mut [[f32; 3]]) {
         let count = uv.len();
         let (mut u, mut v) = ([0.0f32; LANES], [0.0f32; LANES]);
         for (l, p) in uv.iter().enumerate() {
@@ -207,23 +173,11 @@ impl Sampler<'_> {
         }
         let mut sum = [[0.0f32; FIELD_COUNT]; LANES];
         let preserve = self.interp == Interp::VariancePreserving;
-        for (i, (layer, o)) in self.layers.iter().zip(&self.origin).enumerate() {
+        for (layer, o) in self.layers.iter().zip(&self.origin) {
             let inv = layer.inv_dx();
             let px = std::array::from_fn(|l| o[0] + u[l] as f64 * inv);
             let pz = std::array::from_fn(|l| o[1] + v[l] as f64 * inv);
-            match weights {
-                None => layer.add_bilinear_lanes(&px, &pz, count, preserve, &mut sum),
-                Some(w) => {
-                    if w.iter().all(|w| w[i] == 0.0) {
-                        continue;
-                    }
-                    let mut t = [[0.0f32; FIELD_COUNT]; LANES];
-                    layer.add_bilinear_lanes(&px, &pz, count, preserve, &mut t);
-                    for ((s, t), w) in sum.iter_mut().zip(&t).zip(w) {
-                        add_texel(s, &t.map(|x| x * w[i]));
-                    }
-                }
-            }
+            layer.add_bilinear_lanes(&px, &pz, count, preserve, &mut sum);
         }
         for (n, s) in out.iter_mut().zip(&sum) {
             *n = normal_from_slopes(slopes(s)).0;
@@ -356,6 +310,7 @@ impl Surface {
             sampled: OnceLock::new(),
             slopes: OnceLock::new(),
             read_slopes: OnceLock::new(),
+            levels: OnceLock::new(),
             summary: OnceLock::new(),
         };
         surface.seconds = start.elapsed().as_secs_f64();
@@ -379,6 +334,7 @@ impl Surface {
             sampled: OnceLock::new(),
             slopes: OnceLock::new(),
             read_slopes: OnceLock::new(),
+            levels: OnceLock::new(),
             summary: OnceLock::new(),
         }
     }
@@ -393,6 +349,7 @@ impl Surface {
         self.sampled = OnceLock::new();
         self.slopes = OnceLock::new();
         self.read_slopes = OnceLock::new();
+        self.levels = OnceLock::new();
         self.summary = OnceLock::new();
         Ok(())
     }
@@ -416,6 +373,7 @@ impl Surface {
             layers: &self.layers,
             origin: o,
             interp,
+            levels: None,
         }
     }
 
@@ -474,6 +432,12 @@ impl Surface {
     pub fn read_slopes(&self) -> &SurfaceSlopes {
         self.read_slopes
             .get_or_init(|| SurfaceSlopes::new(self, SlopeSource::Read(self.params.interp)))
+    }
+
+    /// Every layer's low-passed levels ([`Levels`]), built on first use and shared by every
+    /// render of the surface at its time.
+    pub fn levels(&self) -> &Levels {
+        self.levels.get_or_init(|| Levels::new(&self.layers))
     }
 
     /// A lower bound on J = (1 + dDx/dx)(1 + dDz/dz) - (dDx/dz)^2 over every read of the summed

@@ -20,6 +20,7 @@ use super::interface::{
     SurfacePoint, bend_normal, bend_threshold, exact_surface_point, keep_side, surface_point,
 };
 use super::microfacet::{Lobe, power_heuristic};
+use super::normals::Unresolved;
 use super::water::{fresnel, reflect, refract};
 use crate::accel::{Hit, Ray};
 use crate::config::{FilterLobe, WrongSide};
@@ -79,8 +80,8 @@ impl Scatter {
 pub(super) struct HitShading {
     /// The shading normal, air side up.
     pub(super) normal: Vec3,
-    /// The unresolved waves' slope covariance (filtered normals), or zero.
-    pub(super) cov: [f32; 3],
+    /// The unresolved waves (filtered normals), or none.
+    pub(super) rough: Unresolved,
     /// The footprint's width at the hit, m.
     pub(super) width_m: f32,
     /// The path's segment (its depth) at this hit.
@@ -131,11 +132,15 @@ impl SceneRef<'_> {
             width_m: shading.width_m,
             ..Scatter::NONE
         };
-        // The unresolved waves around the resolved normal (filtered normals), and for the
-        // `mapped` lobe a normal drawn from them by area, as a point of the pixel would have
-        // it, shaded from here on exactly as a mapped normal is.
+        // The unresolved waves (filtered normals), and for the `mapped` lobe a normal drawn
+        // from them by area, as a point of the pixel would have it: their slopes added to the
+        // resolved normal's, both measured from the local vertical as the layers' are, and
+        // shaded from here on exactly as a mapped normal is.
         let area_lobe = (settings.filter_lobe == FilterLobe::Mapped)
-            .then(|| Lobe::new(ns, shading.cov))
+            .then(|| {
+                let up = shading.rough.up;
+                Lobe::around(if from_below { -up } else { up }, ns, shading.rough.cov)
+            })
             .flatten();
         if let Some(lobe) = &area_lobe {
             c.rough_hits += 1;
@@ -173,7 +178,7 @@ impl SceneRef<'_> {
         }
         // Around the normal the policy left.
         let smith = (settings.filter_lobe == FilterLobe::Smith)
-            .then(|| Lobe::new(ns, shading.cov))
+            .then(|| Lobe::new(ns, shading.rough.cov))
             .flatten();
         let Some(lobe) = smith else {
             s.fresnel = fresnel(-d.dot(ns), eta_i, eta_t);

@@ -25,6 +25,7 @@ pub use super::counters::Counters;
 pub use super::earth_tilt::{tilt_to_earth, tilt_to_earth_many};
 use super::footprint;
 pub use super::interface::{bend_normal, spawn_ray};
+use super::normals::Unresolved;
 use super::objects::ObjectScatter;
 use super::shortcuts::Untraced;
 pub use super::shortcuts::{highest_vertex_y, hit_on_triangle, max_slope};
@@ -139,10 +140,10 @@ impl SceneRef<'_> {
             normals: mode,
             ..TraceSettings::default()
         };
-        let (mut n, mut cov) = ([Vec3::Y], [[0.0; 3]]);
+        let (mut n, mut rough) = ([Vec3::Y], [Unresolved::NONE]);
         let c = &mut Counters::default();
-        self.shading_normals(&[Some(*hit)], &[width_m], &settings, c, &mut n, &mut cov);
-        (n[0], cov[0])
+        self.shading_normals(&[Some(*hit)], &[width_m], &settings, c, &mut n, &mut rough);
+        (n[0], rough[0].cov)
     }
 
     /// Radiance arriving at `ray.org` along `-ray.dir`. `in_water`: the ray travels in the sea.
@@ -387,14 +388,14 @@ impl SceneRef<'_> {
             }
         }
         let mut normals = [Vec3::Y; CAMERA_BATCH];
-        let mut covs = [[0.0f32; 3]; CAMERA_BATCH];
+        let mut rough = [Unresolved::NONE; CAMERA_BATCH];
         self.shading_normals(
             &hits[..m],
             &widths[..m],
             settings,
             c,
             &mut normals[..m],
-            &mut covs[..m],
+            &mut rough[..m],
         );
         let mut shaded = [(0u8, Scatter::NONE); CAMERA_BATCH];
         let mut n_shaded = 0;
@@ -419,7 +420,7 @@ impl SceneRef<'_> {
                     });
                     let shading = HitShading {
                         normal: normals[i],
-                        cov: covs[i],
+                        rough: rough[i],
                         width_m: widths[i],
                         segment,
                     };

@@ -27,6 +27,10 @@ pub struct Lobe {
     pub z: Vec3,
     /// Beckmann roughness along x and y.
     pub alpha: [f32; 2],
+    /// The slopes of the distribution's centre along x and y: zero for a lobe around its own
+    /// z ([`Self::new`]), the resolved normal's slopes for one around the vertical
+    /// ([`Self::around`]). Only the by-area density and sampling read it.
+    pub mean: [f32; 2],
 }
 
 impl Lobe {
@@ -70,7 +74,24 @@ impl Lobe {
                 (2.0 * l1).sqrt().max(MIN_ALPHA),
                 (2.0 * l2).sqrt().max(MIN_ALPHA),
             ],
+            mean: [0.0; 2],
         })
+    }
+
+    /// The lobe of slopes of covariance `cov` added to the slopes of the unit normal `n`, both
+    /// measured from the vertical `up` (air side up, or both mirrored to the water side): the
+    /// sum of the resolved and the unresolved waves' slopes, as the normal of a point of the
+    /// pixel has them. A lobe around `n` itself ([`Self::new`]) rotates the unresolved slopes
+    /// with the resolved normal instead, which tilts and narrows them by the resolved slope's
+    /// square. `None` as for [`Self::new`], or where `n` lies in the horizontal plane.
+    pub fn around(up: Vec3, n: Vec3, cov: [f32; 3]) -> Option<Lobe> {
+        let mut lobe = Lobe::new(up, cov)?;
+        let nz = n.dot(lobe.z);
+        if nz <= 0.0 {
+            return None;
+        }
+        lobe.mean = [-n.dot(lobe.x) / nz, -n.dot(lobe.y) / nz];
+        Some(lobe)
     }
 
     /// `w` in the local frame, and whether it was on the water side (then mirrored to z > 0).
@@ -98,7 +119,10 @@ impl Lobe {
             return 0.0;
         }
         let cos2 = m.z * m.z;
-        let (sx, sy) = (m.x / (m.z * self.alpha[0]), m.y / (m.z * self.alpha[1]));
+        let (sx, sy) = (
+            (-m.x / m.z - self.mean[0]) / self.alpha[0],
+            (-m.y / m.z - self.mean[1]) / self.alpha[1],
+        );
         (-(sx * sx + sy * sy)).exp()
             / (std::f32::consts::PI * self.alpha[0] * self.alpha[1] * cos2 * cos2)
     }
@@ -134,7 +158,10 @@ impl Lobe {
         let r = (-2.0 * (1.0 - u1).max(1e-30).ln()).sqrt();
         let (s, c) = (std::f32::consts::TAU * u2).sin_cos();
         let k = std::f32::consts::FRAC_1_SQRT_2;
-        let (sx, sy) = (k * self.alpha[0] * r * c, k * self.alpha[1] * r * s);
+        let (sx, sy) = (
+            k * self.alpha[0] * r * c + self.mean[0],
+            k * self.alpha[1] * r * s + self.mean[1],
+        );
         Vec3::new(-sx, -sy, 1.0).normalize()
     }
 

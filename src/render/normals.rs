@@ -1,7 +1,8 @@
 //! Shading normals at a batch of hits: the interpolated vertex normals, the ocean's own
 //! normals recomputed from the layers at the interpolated texture coordinate (paper section 4),
 //! with the cost of the mapped normals measured as the render goes, or the surface's own
-//! geometric normal.
+//! geometric normal; for filtered normals, the normal of the waves the footprint resolves and
+//! what it leaves unresolved.
 
 use glam::Vec3;
 
@@ -12,16 +13,33 @@ use super::interface::surface_point;
 use crate::accel::Hit;
 use crate::config::NormalMode;
 use crate::mesh::Mesh;
-use crate::ocean::MAX_LAYERS;
+use crate::ocean::slopes::Split;
+
+/// What filtered normals leave to the lobe at a hit: the unresolved waves' slope covariance
+/// (xx, xz, zz) in the flat sea's axes, and the local vertical, from which those slopes (and
+/// the resolved normal's) are measured.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Unresolved {
+    pub(super) cov: [f32; 3],
+    pub(super) up: Vec3,
+}
+
+impl Unresolved {
+    /// Nothing unresolved (every mode but filtered normals, and a miss).
+    pub(super) const NONE: Unresolved = Unresolved {
+        cov: [0.0; 3],
+        up: Vec3::Y,
+    };
+}
 
 impl SceneRef<'_> {
     /// The shading normals (air side up) at a batch of hits into `out` (a miss's entry is
     /// not used: left as it is, or +y).
     /// Mapped normals: each hit's texture coordinate, the ocean's normals there computed
     /// together ([`Sampler::normals`], bit for bit one at a time), tilted to the curved earth.
-    /// Filtered normals: the same, each layer weighted by the share of its waves the hit's
-    /// footprint (`widths[i]` metres across) resolves, and the slope covariance of the rest
-    /// into `covs` ([`crate::ocean::slopes::SurfaceSlopes::split`]; left as it is for other modes).
+    /// Filtered normals: the same, each layer read from the low-passed levels that the hit's
+    /// footprint (`widths[i]` metres across) resolves, and the slopes of the rest into `rough`
+    /// ([`crate::ocean::slopes::SurfaceSlopes::split`]; left as it is for other modes).
     /// One call in 64 is timed alone, one timed with a second evaluation of the same normals
     /// (see [`Counters::normal_map_thread_seconds`]).
     pub(super) fn shading_normals(
@@ -31,7 +49,7 @@ impl SceneRef<'_> {
         settings: &TraceSettings,
         c: &mut Counters,
         out: &mut [Vec3],
-        covs: &mut [[f32; 3]],
+        rough: &mut [Unresolved],
     ) {
         debug_assert!(hits.len() <= CAMERA_BATCH && out.len() == hits.len());
         let mesh = self.accel.mesh();
@@ -50,20 +68,26 @@ impl SceneRef<'_> {
                 if n == 0 {
                     return;
                 }
-                let mut weights = [[1.0f32; MAX_LAYERS]; CAMERA_BATCH];
-                // (Without the slope bands every wave counts as resolved: mapped normals.)
-                if let Some(slopes) = self.slopes.filter(|_| filtered) {
+                let mut splits = [Split::RESOLVED; CAMERA_BATCH];
+                // (Without the slopes every wave counts as resolved: mapped normals.)
+                let slopes = self.slopes.filter(|_| filtered);
+                if let Some(slopes) = slopes {
+                    let mut ups = [Vec3::Y; CAMERA_BATCH];
+                    tilt_to_earth_many(&uv[..n], self.earth_radius_m, &mut ups[..n]);
                     for (j, &i) in at[..n].iter().enumerate() {
-                        let sigma = widths[i as usize] * settings.filter_width;
-                        let split = slopes.split(sigma);
-                        weights[j] = split.weights;
-                        covs[i as usize] = split.cov;
+                        let i = i as usize;
+                        let sigma = widths[i] * settings.filter_width;
+                        splits[j] = slopes.split(sigma);
+                        rough[i] = Unresolved {
+                            cov: splits[j].cov,
+                            up: ups[j],
+                        };
                     }
                 }
                 let mapped = |normals: &mut [Vec3]| {
                     let mut flat = [[0.0f32; 3]; CAMERA_BATCH];
-                    if filtered {
-                        ocean.normals_weighted(&uv[..n], &weights[..n], &mut flat[..n]);
+                    if slopes.is_some() {
+                        ocean.normals_split(&uv[..n], &splits[..n], &mut flat[..n]);
                     } else {
                         ocean.normals(&uv[..n], &mut flat[..n]);
                     }

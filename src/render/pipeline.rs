@@ -377,8 +377,14 @@ impl Prepared {
         let placed = self.placed_config(cfg)?;
         let cfg = placed.as_ref();
         let camera = Camera::new(cfg.camera.aimed(), cfg.camera.width, cfg.camera.aspect);
-        let sampler = self.ocean.sampler(self.camera_position_m);
         let filtered = cfg.render.normals == crate::config::NormalMode::Filtered;
+        let sampler = self.ocean.sampler(self.camera_position_m);
+        // filtered normals read the layers' low-passed levels for the waves a footprint resolves
+        let sampler = if filtered {
+            sampler.with_levels(self.pool.install(|| self.ocean.levels()))
+        } else {
+            sampler
+        };
         // the `mapped` lobe draws the normals the lookup would read, the `smith` lobe the sea's
         let slopes = filtered.then(|| {
             self.pool.install(|| match cfg.render.filter_lobe {

@@ -41,14 +41,15 @@ use crate::rng::splitmix64;
 
 mod amplitudes;
 mod fields;
+mod level;
 mod read;
 
 pub use fields::FieldPlanes;
 
-pub use read::read_power_transfer;
 #[cfg(test)]
-use read::{LANE_RANGE, split, split_lanes};
+use read::{LANE_RANGE, catmull_rom, split, split_lanes};
 pub(crate) use read::{LagCorrelations, add_texel};
+pub use read::{read_cross_transfer, read_power_transfer};
 
 /// Number of fields per texel.
 pub const FIELD_COUNT: usize = 8;

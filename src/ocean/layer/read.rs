@@ -82,7 +82,7 @@ fn preserve_variance(r: &mut Texel, fx: f32, fz: f32, rho: &LagCorrelations) {
 }
 
 #[inline]
-fn catmull_rom(t: f32) -> [f32; 4] {
+pub(super) fn catmull_rom(t: f32) -> [f32; 4] {
     let t2 = t * t;
     let t3 = t2 * t;
     [
@@ -130,6 +130,52 @@ pub fn read_power_transfer(interp: Interp, theta: f64) -> f64 {
         Interp::Bilinear => mean(&|t| [1.0 - t, t, 0.0, 0.0], 2),
         Interp::Bicubic => mean(&|t| catmull_rom(t as f32).map(f64::from), 4),
         Interp::VariancePreserving | Interp::Prefiltered => 1.0,
+    }
+}
+
+/// The mean product, over the positions between grid points, of a read of a wave on one grid
+/// and its read on a grid twice as coarse whose points are every other one of the first's,
+/// along one axis: E[b(theta, x) conj b(2 theta, x)], b the read's response to a wave of unit
+/// amplitude that advances `theta` radians a texel of the finer grid, relative to the wave
+/// itself. With the read's own power ([`read_power_transfer`]) of each, it gives the
+/// covariance of a blend of two levels of a layer ([`crate::ocean::levels`]): a 2-D read's is
+/// the real part of the product of its two axes'. Each half of the coarse cell is one
+/// polynomial in the position, of degree at most 7 for Catmull-Rom, which 4-point
+/// Gauss-Legendre integrates exactly. Prefiltered reads divide each grid's by the square root
+/// of its bilinear power; so, in place of their own (they rescale each field as a whole),
+/// do variance-preserving ones.
+pub fn read_cross_transfer(interp: Interp, theta: f64) -> Complex<f64> {
+    const GAUSS: [(f64, f64); 4] = [
+        (0.069_431_844_202_973_7, 0.173_927_422_568_726_9),
+        (0.330_009_478_207_571_9, 0.326_072_577_431_273_1),
+        (0.669_990_521_792_428_1, 0.326_072_577_431_273_1),
+        (0.930_568_155_797_026_3, 0.173_927_422_568_726_9),
+    ];
+    // The response at fraction f of a cell of a grid whose texels the wave advances by `phase`.
+    let response = |phase: f64, f: f64| -> Complex<f64> {
+        let (w, first): ([f64; 4], f64) = match interp {
+            Interp::Bicubic => (catmull_rom(f as f32).map(f64::from), -1.0),
+            _ => ([1.0 - f, f, 0.0, 0.0], 0.0),
+        };
+        w.iter()
+            .enumerate()
+            .map(|(i, &w)| Complex::from_polar(w, phase * (first + i as f64 - f)))
+            .sum()
+    };
+    let mut c = Complex::new(0.0, 0.0);
+    for half in 0..2 {
+        for &(t, g) in &GAUSS {
+            // the coarse cell's fraction u, the fine cell's 2u - half
+            let u = 0.5 * (half as f64 + t);
+            c += 0.5 * g * response(theta, 2.0 * u - half as f64) * response(2.0 * theta, u).conj();
+        }
+    }
+    match interp {
+        Interp::Prefiltered | Interp::VariancePreserving => {
+            let t = |phase: f64| read_power_transfer(Interp::Bilinear, phase);
+            c / (t(theta) * t(2.0 * theta)).sqrt()
+        }
+        Interp::Bilinear | Interp::Bicubic => c,
     }
 }
 

@@ -202,3 +202,80 @@ fn water_side_directions_mirror_into_the_upper_half_and_back() {
     assert!(below && l.z > 0.0);
     assert!((lobe.world(l, below) - w).length() < 1e-6);
 }
+
+#[test]
+fn a_lobe_around_the_vertical_adds_its_slopes_to_the_resolved_normals() {
+    // By area, the normals of a lobe around the vertical have the resolved normal's slopes
+    // plus Gaussian ones of the covariance asked for, measured from the vertical in the world's
+    // (flat sea's) x and z, and their density is D(m) m.z: a chi-square test of the drawn
+    // normals against it, on the water side too.
+    let up = Vec3::new(0.002, 1.0, -0.001).normalize();
+    let resolved = Vec3::new(-0.15, 1.0, 0.08).normalize();
+    let cov = [0.012f32, 0.003, 0.006];
+    let (sx0, sz0) = (-resolved.x / resolved.y, -resolved.z / resolved.y);
+    for below in [false, true] {
+        let (u, n) = if below {
+            (-up, -resolved)
+        } else {
+            (up, resolved)
+        };
+        let lobe = Lobe::around(u, n, cov).unwrap();
+        let mut rng = Rng::keyed(&[13]);
+        let samples = 400_000;
+        let mut acc = [0.0f64; 5];
+        let (nz, nphi) = (30, 60);
+        let mut observed = vec![0u32; nz * nphi];
+        for _ in 0..samples {
+            let m = lobe.sample_area(rng.f32(), rng.f32());
+            // (local z is the vertical on either side)
+            let i = (((1.0 - m.z) * 5.0 * nz as f32) as usize).min(nz - 1);
+            let phi = m.y.atan2(m.x).rem_euclid(std::f32::consts::TAU);
+            let j = ((phi / std::f32::consts::TAU * nphi as f32) as usize).min(nphi - 1);
+            observed[i * nphi + j] += 1;
+            let w = lobe.world(m, false);
+            let w = if below { -w } else { w };
+            let (sx, sz) = ((-w.x / w.y - sx0) as f64, (-w.z / w.y - sz0) as f64);
+            for (a, v) in acc.iter_mut().zip([sx, sz, sx * sx, sx * sz, sz * sz]) {
+                *a += v;
+            }
+        }
+        let mean = acc.map(|a| a / samples as f64);
+        assert!(
+            mean[0].abs() < 1e-3 && mean[1].abs() < 1e-3,
+            "{below}: {mean:?}"
+        );
+        for (c, &want) in cov.iter().enumerate() {
+            let got = mean[2 + c] - if c == 1 { mean[0] * mean[1] } else { 0.0 };
+            assert!(
+                (got - want as f64).abs() < 0.02 * 0.012 + 2e-4 * (c == 1) as u8 as f64,
+                "{below}, {c}: {got} vs {want}"
+            );
+        }
+        // Expected counts in cells of (1 - m.z, phi) out to 37 degrees, from D(m) m.z on a 6 x 6
+        // sub-grid.
+        let (mut expected, sub) = (vec![0.0f64; nz * nphi], 6);
+        for a in 0..nz * sub {
+            for b in 0..nphi * sub {
+                let z = 1.0 - (a as f32 + 0.5) / (5.0 * (nz * sub) as f32);
+                let phi = std::f32::consts::TAU * (b as f32 + 0.5) / (nphi * sub) as f32;
+                let r = (1.0 - z * z).sqrt();
+                let m = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+                let area = std::f32::consts::TAU / (nphi * sub) as f32 / (5.0 * (nz * sub) as f32);
+                expected[(a / sub) * nphi + b / sub] +=
+                    (lobe.d(m) * m.z * area) as f64 * samples as f64;
+            }
+        }
+        let (mut chi2, mut dof) = (0.0, 0.0);
+        for (o, e) in observed.iter().zip(&expected) {
+            if *e >= 5.0 {
+                chi2 += (*o as f64 - e).powi(2) / e;
+                dof += 1.0;
+            }
+        }
+        let z = chi2_z(chi2, dof - 1.0);
+        assert!(
+            dof > 200.0 && z < 3.7,
+            "{below}: chi2 {chi2} over {dof} cells: z {z}"
+        );
+    }
+}
