@@ -8,6 +8,7 @@ use glam::Vec3;
 
 use super::counters::Counters;
 use super::earth_tilt::tilt_to_earth_many;
+use super::footprint::mesh_sigma;
 use super::integrator::{CAMERA_BATCH, SceneRef, TraceSettings};
 use super::interface::surface_point;
 use crate::accel::Hit;
@@ -76,7 +77,9 @@ impl SceneRef<'_> {
                     tilt_to_earth_many(&uv[..n], self.earth_radius_m, &mut ups[..n]);
                     for (j, &i) in at[..n].iter().enumerate() {
                         let i = i as usize;
-                        let sigma = widths[i] * settings.filter_width;
+                        let h = hits[i].expect("a hit's entry");
+                        let tri = mesh.indices()[h.prim as usize].map(|v| mesh.uvs()[v as usize]);
+                        let sigma = (widths[i] * settings.filter_width).min(mesh_sigma(tri));
                         splits[j] = slopes.split(sigma);
                         rough[i] = Unresolved {
                             cov: splits[j].cov,
