@@ -161,7 +161,7 @@ impl fmt::Display for RenderReport {
         )?;
         writeln!(
             f,
-            "  seconds: ocean {:.2}, tessellation {:.2}, BVH {:.2}{}, trace {:.2} (normal mapping ~{:.2}, {:.1}%), total {:.2}",
+            "  seconds: ocean {:.2}, tessellation {:.2}, BVH {:.2}{}{}, trace {:.2} (normal mapping ~{:.2}, {:.1}%), total {:.2}",
             self.seconds_ocean,
             self.seconds_tessellation,
             self.seconds_build,
@@ -169,6 +169,11 @@ impl fmt::Display for RenderReport {
                 String::new()
             } else {
                 format!(", objects {:.2}", self.seconds_objects)
+            },
+            if self.seconds_levels > 0.0 {
+                format!(", filtered normals' levels {:.2}", self.seconds_levels)
+            } else {
+                String::new()
             },
             self.seconds_trace,
             self.seconds_normal_map,

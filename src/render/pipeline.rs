@@ -378,6 +378,7 @@ impl Prepared {
         let cfg = placed.as_ref();
         let camera = Camera::new(cfg.camera.aimed(), cfg.camera.width, cfg.camera.aspect);
         let filtered = cfg.render.normals == crate::config::NormalMode::Filtered;
+        let levels_start = Instant::now();
         let sampler = self.ocean.sampler(self.camera_position_m);
         // filtered normals read the layers' low-passed levels for the waves a footprint resolves
         let sampler = if filtered {
@@ -392,6 +393,11 @@ impl Prepared {
                 crate::config::FilterLobe::Smith => self.ocean.slopes(),
             })
         });
+        let seconds_levels = if filtered {
+            levels_start.elapsed().as_secs_f64()
+        } else {
+            0.0
+        };
         let scene_ref = SceneRef {
             slopes,
             // sampled at rough hits of filtered normals and at objects' hits
@@ -472,6 +478,7 @@ impl Prepared {
             seconds_tessellation: self.seconds_tessellation,
             seconds_build,
             seconds_objects,
+            seconds_levels,
             seconds_trace,
             seconds_normal_map,
             normal_map_share: seconds_normal_map / seconds_trace.max(1e-12),
@@ -479,6 +486,7 @@ impl Prepared {
                 + self.seconds_tessellation
                 + seconds_build
                 + seconds_objects
+                + seconds_levels
                 + seconds_trace,
             png_exposure_stops: None,
             rays: c.rays,

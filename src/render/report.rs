@@ -44,6 +44,10 @@ pub struct RenderReport {
     /// Reading, placing and building the objects (0 without any).
     #[serde(default)]
     pub seconds_objects: f64,
+    /// Building the layers' low-passed levels and slope tables that filtered normals read, on
+    /// their first render of an ocean (0 for other normals, or once built).
+    #[serde(default)]
+    pub seconds_levels: f64,
     pub seconds_trace: f64,
     /// Wall-clock seconds the mapped normals add to the trace, estimated from single and
     /// paired timed batches (`Counters::normal_map_thread_seconds`; thread-seconds divided by the thread
