@@ -74,26 +74,22 @@ fn main() {
             n += 1.0;
         }
     }
-    let se = (sva + svb).sqrt() / n;
-    println!(
-        "band 0..-5: a {:.5} b {:.5} diff {:+.5} se {:.5} z {:+.2} rel {:+.3}%",
-        sa / n,
-        sb / n,
-        (sb - sa) / n,
-        se,
-        (sb - sa) / n / se,
-        100.0 * (sb - sa) / sa
-    );
+    total("band 0..-5:", (sa, sb), (sva, svb), n);
     if en > 0.0 {
-        let se = (eva + evb).sqrt() / en;
-        println!(
-            "sea:       a {:.5} b {:.5} diff {:+.5} se {:.5} z {:+.2} rel {:+.3}%",
-            ea / en,
-            eb / en,
-            (eb - ea) / en,
-            se,
-            (eb - ea) / en / se,
-            100.0 * (eb - ea) / ea
-        );
+        total("sea:      ", (ea, eb), (eva, evb), en);
     }
+}
+
+/// A weighted total of the rows of A and B: their means, the difference and its standard error.
+fn total(label: &str, (a, b): (f64, f64), (va, vb): (f64, f64), n: f64) {
+    let se = (va + vb).sqrt() / n;
+    println!(
+        "{label} a {:.5} b {:.5} diff {:+.5} se {:.5} z {:+.2} rel {:+.3}%",
+        a / n,
+        b / n,
+        (b - a) / n,
+        se,
+        (b - a) / n / se,
+        100.0 * (b - a) / a
+    );
 }
