@@ -23,10 +23,10 @@ use vastocean::render::Camera;
 use vastocean::render::pipeline::prepare;
 use vastocean::sky::{SUN_RADIUS_RAD, SkySource};
 
-/// The scene `scenes/far-field-glitter.toml` (the default sea without choppiness, seen from
-/// 3 km up, 40 degrees down towards a sun 40 degrees up at infinity, a black sky around it and
-/// no water-leaving light) 64 pixels wide: each pixel spans 16 mrad, some 70 m of sea, and the
-/// footprint leaves out all but the longest swell's slopes.
+/// The scene `scenes/far-field-glitter.toml` (the default sea state without choppiness, at its
+/// realization's own height, seen from 3 km up, 40 degrees down towards a sun 40 degrees up at
+/// infinity, a black sky around it and no water-leaving light) 64 pixels wide: each pixel spans
+/// 16 mrad, some 70 m of sea, and the footprint leaves out all but the longest swell's slopes.
 fn scene(lobe: FilterLobe, spp: u32) -> SceneConfig {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/far-field-glitter.toml");
