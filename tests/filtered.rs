@@ -107,7 +107,7 @@ fn a_footprint_that_resolves_every_wave_gives_the_mapped_normal() {
         skip_slope: None,
         skip_above_y: None,
         predict_camera_hits: false,
-        ocean: Some(p.ocean.sampler([0.0, 0.0])),
+        ocean: Some(p.ocean.sampler([0.0, 0.0]).with_levels(p.ocean.levels())),
         slopes: Some(slopes),
         sun: p.sky.sun_light(),
         earth_radius_m: 6_371_000.0,
@@ -126,8 +126,9 @@ fn a_footprint_that_resolves_every_wave_gives_the_mapped_normal() {
         let (n, cov) = scene.filtered_normal_at(&hit, 0.0, NormalMode::Filtered);
         assert_eq!(n, mapped);
         assert_eq!(cov, [0.0; 3]);
-        // A footprint of a metre leaves most of the short waves' slopes unresolved, and the
-        // normal keeps only the long ones.
+        // A footprint of a metre, bounded by paper-low's 0.9 m triangles near the camera to a
+        // std of 3 cm, leaves much of the finest layer's slopes unresolved, and the normal
+        // keeps the rest.
         let (wide, cov) = scene.filtered_normal_at(&hit, 1.0, NormalMode::Filtered);
         assert!(cov[0] + cov[2] > 1e-3, "{cov:?}");
         assert!(wide != mapped && wide.is_normalized());

@@ -170,7 +170,8 @@ impl fmt::Display for RenderReport {
             } else {
                 format!(", objects {:.2}", self.seconds_objects)
             },
-            if self.seconds_levels > 0.0 {
+            // (a render of an ocean whose levels are built spends a few microseconds here)
+            if self.seconds_levels >= 0.005 {
                 format!(", filtered normals' levels {:.2}", self.seconds_levels)
             } else {
                 String::new()

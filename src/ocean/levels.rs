@@ -6,6 +6,8 @@
 //! normal keeps the long waves whole and leaves out the short ones, as the average of the
 //! normals over the footprint does.
 
+use rustfft::FftPlanner;
+
 use super::Interp;
 use super::layer::{FIELD_COUNT, FieldPlanes, Layer, Texel, add_texel, slopes};
 use super::slopes::{MIN_RESOLVED_SHARE, NOT_READ, Split};
@@ -25,6 +27,7 @@ impl Levels {
     /// a layer is not read at all) or a grid of [`MIN_LEVEL_N`] texels.
     pub fn new(layers: &[Layer]) -> Levels {
         let mut planes = FieldPlanes::default();
+        let mut planner = FftPlanner::new();
         let layers = layers
             .iter()
             .map(|layer| {
@@ -34,7 +37,7 @@ impl Levels {
                     if layer.n() >> l < MIN_LEVEL_N {
                         break;
                     }
-                    let level = layer.low_passed_in(l, &mut planes);
+                    let level = layer.low_passed_in(l, &mut planes, &mut planner);
                     // (a NaN slope ends the levels too)
                     let keeps = level.grid_stats().mss;
                     if keeps.is_nan() || keeps < MIN_RESOLVED_SHARE * mss {
@@ -75,6 +78,13 @@ impl<'a> Sampler<'a> {
         self
     }
 
+    /// The levels a split past a layer's own texels reads: a sampler without them cannot
+    /// blend, and reading the layer alone would leave the tables' resolved share wrong.
+    fn levels_of(&self) -> &'a Levels {
+        self.levels
+            .expect("a split past a layer's own texels needs a sampler with_levels")
+    }
+
     /// The unit normals at the points `uv` with each layer read as `split[i]` says for point
     /// i: from its level `levels` (0: the layer itself, [`NOT_READ`]: left out) with weight one
     /// minus `blend`, and from the next with weight `blend` (past the last level: nothing). With
@@ -96,8 +106,7 @@ impl<'a> Sampler<'a> {
                         return [(usize::MAX, 0.0); 2];
                     }
                     let l = l as usize;
-                    let last = self.levels.map_or(0, |v| v.count(i));
-                    let coarser = if t > 0.0 && l < last {
+                    let coarser = if t > 0.0 && l < self.levels_of().count(i) {
                         l + 1
                     } else {
                         usize::MAX
@@ -121,9 +130,7 @@ impl<'a> Sampler<'a> {
                     let level = if l == 0 {
                         layer
                     } else {
-                        self.levels
-                            .expect("a sampler with levels reads a split past level 0")
-                            .level(i, l)
+                        self.levels_of().level(i, l)
                     };
                     // Level l's grid is 2^l times coarser over the same square: its texel
                     // coordinates are the layer's divided by 2^l, exactly.

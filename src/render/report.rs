@@ -45,7 +45,7 @@ pub struct RenderReport {
     #[serde(default)]
     pub seconds_objects: f64,
     /// Building the layers' low-passed levels and slope tables that filtered normals read, on
-    /// their first render of an ocean (0 for other normals, or once built).
+    /// their first render of an ocean (0 for other normals; microseconds once built).
     #[serde(default)]
     pub seconds_levels: f64,
     pub seconds_trace: f64,

@@ -16,9 +16,15 @@ impl Layer {
     /// Level `l` >= 1 of this layer: its amplitudes times exp(-|k|^2 s^2 / 2), s = 2^l times
     /// its grid spacing, on an n / 2^l grid (whose spacing is s) over the same square, read
     /// as this layer is (prefiltered or not), with its fields computed at this layer's time in
-    /// `planes`. The Gaussian is 0.007 at the coarser grid's Nyquist wavenumber, where the
-    /// waves it cannot hold are dropped.
-    pub(crate) fn low_passed_in(&self, l: u32, planes: &mut FieldPlanes) -> Layer {
+    /// `planes`, its transform planned by `planner` (one for all levels). The Gaussian is
+    /// 0.007 at the coarser grid's Nyquist wavenumber, where the waves it cannot hold are
+    /// dropped.
+    pub(crate) fn low_passed_in(
+        &self,
+        l: u32,
+        planes: &mut FieldPlanes,
+        planner: &mut FftPlanner<f32>,
+    ) -> Layer {
         let n = self.n >> l;
         assert!(l >= 1 && n >= 4, "level {l} of a {}-texel layer", self.n);
         let dk = TAU / self.size_m;
@@ -58,7 +64,7 @@ impl Layer {
             grid: GridStats::default(),
             lag_correlations: std::sync::OnceLock::new(),
             prefilter: self.prefilter,
-            fft: FftPlanner::<f32>::new().plan_fft_inverse(n),
+            fft: planner.plan_fft_inverse(n),
             inv_dx: n as f64 / self.size_m,
         };
         level.compute_fields_in(self.time_s, planes);

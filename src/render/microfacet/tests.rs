@@ -245,7 +245,7 @@ fn a_lobe_around_the_vertical_adds_its_slopes_to_the_resolved_normals() {
             "{below}: {mean:?}"
         );
         for (c, &want) in cov.iter().enumerate() {
-            let got = mean[2 + c] - if c == 1 { mean[0] * mean[1] } else { 0.0 };
+            let got = mean[2 + c] - [mean[0] * mean[0], mean[0] * mean[1], mean[1] * mean[1]][c];
             assert!(
                 (got - want as f64).abs() < 0.02 * 0.012 + 2e-4 * (c == 1) as u8 as f64,
                 "{below}, {c}: {got} vs {want}"
