@@ -324,7 +324,7 @@ impl SceneRef<'_> {
             let mut l = [Vec3::ZERO; CAMERA_BATCH];
             let (orgs, dirs) = (&sky_org[..n_sky], &sky_dir[..n_sky]);
             self.sky.radiance_many(orgs, dirs, &mut l[..n_sky]);
-            for (&k, l) in sky_entry[..n_sky].iter().zip(l) {
+            for (&k, &l) in sky_entry[..n_sky].iter().zip(&l) {
                 let e = &entries[k as usize];
                 out[k as usize] = self.weigh_sun(e.ray.org.into(), e.ray.dir.into(), e.sun_pdf, l);
             }
@@ -425,7 +425,9 @@ impl SceneRef<'_> {
                         segment,
                     };
                     let rng = &mut rngs[e.sample as usize];
-                    shaded[n_shaded] = (k, self.scatter(&e.ray, hit, shading, settings, rng, c));
+                    let slot = &mut shaded[n_shaded];
+                    slot.0 = k;
+                    self.scatter(&e.ray, hit, shading, settings, rng, c, &mut slot.1);
                     n_shaded += 1;
                 }
             }
@@ -523,7 +525,8 @@ impl SceneRef<'_> {
                     c,
                     &mut lb[..b],
                 );
-                for (&j, lb) in of[..b].iter().zip(lb) {
+                // (by reference: the array by value is a 192-byte memcpy)
+                for (&j, &lb) in of[..b].iter().zip(&lb) {
                     let masking = dirs[j as usize].map_or(1.0, |b| b.2);
                     l[j as usize] = masking * lb;
                 }
