@@ -3,7 +3,6 @@
 use std::path::Path;
 
 use glam::Vec3;
-use rayon::prelude::*;
 
 use crate::equirect;
 use crate::image_io::{ImageError, RgbImage};
@@ -41,10 +40,18 @@ pub fn validate_map(path: &Path, img: &RgbImage) -> Result<(), ImageError> {
             img.width, img.height
         )));
     }
-    if let Some(i) = img
+    // (0 <= c <= MAX is false for NaN, infinities and negatives.) A branch-free pass the
+    // compiler vectorises, then the search for the first bad texel only where there is one:
+    // searching with a short-circuit on every texel took 10 ms of a 2048 x 1024 map's load,
+    // and in parallel 20 ms (the global thread pool's start-up).
+    let valid = |c: f32| (0.0..=f32::MAX).contains(&c);
+    let all_valid = img
         .pixels
-        .par_iter()
-        .position_first(|p| p.iter().any(|c| !c.is_finite() || *c < 0.0))
+        .chunks(1024)
+        .all(|chunk| chunk.iter().flatten().fold(true, |ok, &c| ok & valid(c)));
+    if let Some(i) = (!all_valid)
+        .then(|| img.pixels.iter().position(|p| !p.iter().all(|&c| valid(c))))
+        .flatten()
     {
         return Err(invalid(format!(
             "texel ({}, {}) is {:?}: sky radiance must be finite and >= 0",

@@ -363,6 +363,21 @@ fn bad_maps_are_rejected_with_the_reason() {
             .to_string()
             .contains("texel (3, 0)")
     );
+    // every kind of bad value, in any channel, past the first chunk of the check; the first
+    // bad texel is the one named; the largest finite value and zero are valid
+    for bad in [f32::INFINITY, f32::NEG_INFINITY, -1e-30, -0.5, f32::NAN] {
+        for channel in 0..3 {
+            let mut img = RgbImage::new(128, 64);
+            img.pixels[0] = [f32::MAX, 0.0, -0.0];
+            img.pixels[5000][channel] = bad;
+            img.pixels[7000] = [bad; 3];
+            let e = validate_map(p, &img).unwrap_err().to_string();
+            assert!(e.contains("texel (8, 39)"), "{bad} in {channel}: {e}");
+        }
+    }
+    let mut img = RgbImage::new(128, 64);
+    img.pixels[0] = [f32::MAX, 0.0, -0.0];
+    assert!(validate_map(p, &img).is_ok());
 }
 
 /// `clip_relative` on the built-in sky clips as on a map: the disc (2e4 times the median sky
