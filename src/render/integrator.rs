@@ -29,6 +29,7 @@ use super::normals::Unresolved;
 use super::objects::ObjectScatter;
 use super::shortcuts::Untraced;
 pub use super::shortcuts::{highest_vertex_y, hit_on_triangle, max_slope};
+use super::slots::Slots;
 use crate::accel::{Accel, Hit, Ray};
 use crate::config::{FilterLobe, NormalMode, SceneConfig, Water, WrongSide};
 use crate::objects::SceneObjects;
@@ -397,8 +398,7 @@ impl SceneRef<'_> {
             &mut normals[..m],
             &mut rough[..m],
         );
-        let mut shaded = [(0u8, Scatter::NONE); CAMERA_BATCH];
-        let mut n_shaded = 0;
+        let mut shaded = Slots::<(u8, Scatter), CAMERA_BATCH>::new();
         for (i, (&k, hit)) in traced_entry[..m].iter().zip(&hits[..m]).enumerate() {
             let e = &entries[k as usize];
             match hit {
@@ -425,21 +425,20 @@ impl SceneRef<'_> {
                         segment,
                     };
                     let rng = &mut rngs[e.sample as usize];
-                    let slot = &mut shaded[n_shaded];
-                    slot.0 = k;
+                    let slot = shaded.push((k, Scatter::NONE));
                     self.scatter(&e.ray, hit, shading, settings, rng, c, &mut slot.1);
-                    n_shaded += 1;
                 }
             }
         }
-        let shaded = &shaded[..n_shaded];
-        let mut objects = [(0u8, ObjectScatter::NONE); CAMERA_BATCH];
-        for (o, &k) in objects.iter_mut().zip(&object_entry[..n_object]) {
+        let shaded = shaded.as_slice();
+        let n_shaded = shaded.len();
+        let mut objects = Slots::<(u8, ObjectScatter), CAMERA_BATCH>::new();
+        for &k in &object_entry[..n_object] {
             let e = &entries[k as usize];
             let hit = obj_hits[k as usize].expect("an object entry has its hit");
             let width = footprint::width_at(e.width_m, settings, hit.t);
             let rng = &mut rngs[e.sample as usize];
-            *o = (
+            objects.push((
                 k,
                 self.scatter_object(
                     &e.ray,
@@ -451,9 +450,9 @@ impl SceneRef<'_> {
                     rng,
                     c,
                 ),
-            );
+            ));
         }
-        let objects = &objects[..n_object];
+        let objects = objects.as_slice();
         // Nodes 0..n_shaded are the sea's hits, the objects' follow.
         let mut suns = [None; CAMERA_BATCH];
         for (sun, s) in suns.iter_mut().zip(shaded.iter().map(|(_, s)| s.sun)) {

@@ -21,6 +21,7 @@ pub mod pipeline;
 pub mod pixel_state;
 pub mod report;
 pub mod shortcuts;
+mod slots;
 pub mod water;
 
 pub use crate::config::{NormalMode, Projection, Water};

@@ -59,22 +59,6 @@ enum Surface {
     Glass(RoughDielectric, bool),
 }
 
-impl ObjectScatter {
-    pub(super) const NONE: ObjectScatter = ObjectScatter {
-        sp: SurfacePoint {
-            p: Vec3::ZERO,
-            ng: Vec3::Y,
-            err: Vec3::ZERO,
-            prim: 0,
-        },
-        weight: Vec3::ZERO,
-        attenuation: Vec3::ZERO,
-        width_m: 0.0,
-        bounce: None,
-        sun: None,
-    };
-}
-
 impl SceneRef<'_> {
     /// The object hits of `rays` into `hits` (all `None` without objects); rays whose `skip`
     /// is set, and rays that miss the objects' bounds, are not traced.
