@@ -78,8 +78,9 @@ impl Layer {
             .map(|ix| {
                 let kx = signed_index(ix, n) * dk;
                 let mut a = [0.0f64; 3];
+                let h = self.h_tilde_row(ix, t);
                 for iz in self.band_indices() {
-                    let p = self.h_tilde(ix, iz, t).norm_sqr() * gain[ix] * gain[iz];
+                    let p = h(iz).norm_sqr() * gain[ix] * gain[iz];
                     let kz = signed_index(iz, n) * dk;
                     a[0] += kx * kx * p;
                     a[1] += kx * kz * p;
@@ -116,13 +117,14 @@ impl Layer {
                 let kx = signed_index(jx, m) * dk;
                 let ix = fine(jx);
                 let mut a = [0.0f64; 3];
+                let (h, h_coarse) = (self.h_tilde_row(ix, t), coarser.h_tilde_row(jx, tc));
                 for jz in coarser.band_indices() {
-                    let hc = coarser.h_tilde(jx, jz, tc);
+                    let hc = h_coarse(jz);
                     if hc.norm_sqr() == 0.0 {
                         continue;
                     }
                     let iz = fine(jz);
-                    let p = (self.h_tilde(ix, iz, t) * hc.conj()).re * (cross[ix] * cross[iz]).re;
+                    let p = (h(iz) * hc.conj()).re * (cross[ix] * cross[iz]).re;
                     let kz = signed_index(jz, m) * dk;
                     a[0] += kx * kx * p;
                     a[1] += kx * kz * p;

@@ -10,34 +10,50 @@ use super::{C32, FIELD_COUNT, GridStats, Layer, read_power_transfer, signed_inde
 use crate::ocean::Interp;
 
 impl Layer {
-    /// h~(k, t) of eq. 2 for cell `i` (kx-major) in f64.
+    /// h~(k, t) of eq. 2 for cell (`ix`, `iz`) in f64.
     #[inline]
     pub(crate) fn h_tilde(&self, ix: usize, iz: usize, t: f64) -> Complex<f64> {
+        self.h_tilde_row(ix, t)(iz)
+    }
+
+    /// [`Layer::h_tilde`] along row `ix`, with the row's look-ups done once: the loops over a
+    /// layer's cells (its fields, its Parseval variance, its slope tables) call it a million
+    /// times a big layer, and the per-cell index arithmetic was most of its cost.
+    #[inline]
+    pub(crate) fn h_tilde_row(&self, ix: usize, t: f64) -> impl Fn(usize) -> Complex<f64> + '_ {
         let (n, c) = (self.n, &self.cells);
-        if !c.inside(ix) || !c.inside(iz) {
-            return Complex::default();
+        // the mirror -k of a cell within the band's reach is within it too
+        let rows = c.inside(ix).then(|| {
+            let row = |i: usize| &self.h0[c.compact_index(i) * c.width..][..c.width];
+            (row(ix), row((n - ix) & (n - 1)))
+        });
+        let dk = TAU / self.size_m;
+        let kx = signed_index(ix, n) * dk;
+        let depth_m = self.depth_m;
+        move |iz: usize| {
+            let Some((ra, rb)) = rows.filter(|_| c.inside(iz)) else {
+                return Complex::default();
+            };
+            let a = ra[c.compact_index(iz)];
+            let b = rb[c.compact_index((n - iz) & (n - 1))];
+            if a == C32::default() && b == C32::default() {
+                return Complex::default();
+            }
+            // e^(i omega t); at t = 0 exactly 1 (what sin_cos(0) gives), the time of every still
+            // render: the dispersion relation's tanh and the sine and cosine were 5 % of its
+            // build
+            let e = if t == 0.0 {
+                Complex::new(1.0, 0.0)
+            } else {
+                let k = kx.hypot(signed_index(iz, n) * dk);
+                let omega = crate::ocean::spectrum::dispersion(k, depth_m);
+                let (s, c) = (omega * t).rem_euclid(TAU).sin_cos();
+                Complex::new(c, s)
+            };
+            let a = Complex::new(a.re as f64, a.im as f64);
+            let b = Complex::new(b.re as f64, -(b.im as f64));
+            a * e + b * e.conj()
         }
-        let at =
-            |ix: usize, iz: usize| self.h0[c.compact_index(ix) * c.width + c.compact_index(iz)];
-        let a = at(ix, iz);
-        let b = at((n - ix) & (n - 1), (n - iz) & (n - 1));
-        if a == C32::default() && b == C32::default() {
-            return Complex::default();
-        }
-        // e^(i omega t); at t = 0 exactly 1 (what sin_cos(0) gives), the time of every still
-        // render: the dispersion relation's tanh and the sine and cosine were 5 % of its build
-        let e = if t == 0.0 {
-            Complex::new(1.0, 0.0)
-        } else {
-            let dk = TAU / self.size_m;
-            let k = (signed_index(ix, n) * dk).hypot(signed_index(iz, n) * dk);
-            let omega = crate::ocean::spectrum::dispersion(k, self.depth_m);
-            let (s, c) = (omega * t).rem_euclid(TAU).sin_cos();
-            Complex::new(c, s)
-        };
-        let a = Complex::new(a.re as f64, a.im as f64);
-        let b = Complex::new(b.re as f64, -(b.im as f64));
-        a * e + b * e.conj()
     }
 
     /// The variance of h over the grid at time `t` from the amplitudes alone: by Parseval the
@@ -48,8 +64,8 @@ impl Layer {
             .band_rows()
             .into_par_iter()
             .map(|ix| {
-                let cols = self.cells.grid_indices();
-                cols.map(|iz| self.h_tilde(ix, iz, t).norm_sqr()).sum()
+                let h = self.h_tilde_row(ix, t);
+                self.cells.grid_indices().map(|iz| h(iz).norm_sqr()).sum()
             })
             .collect();
         rows.iter().sum()
@@ -125,8 +141,9 @@ impl Layer {
                         }
                         let mut any = false;
                         let mut sea = [0.0f64; 2];
+                        let h_tilde = this.h_tilde_row(ix, t);
                         for iz in this.cells.grid_indices() {
-                            let h = this.h_tilde(ix, iz, t);
+                            let h = h_tilde(iz);
                             if h == Complex::default() {
                                 for row in rows.iter_mut() {
                                     row[iz] = C32::default();
