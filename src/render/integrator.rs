@@ -399,15 +399,19 @@ impl SceneRef<'_> {
             &mut rough[..m],
         );
         let mut shaded = Slots::<(u8, Scatter), CAMERA_BATCH>::new();
+        // The misses into the sky, looked up together as the untraced rays' are.
+        let mut sky_misses = Slots::<u8, CAMERA_BATCH>::new();
         for (i, (&k, hit)) in traced_entry[..m].iter().zip(&hits[..m]).enumerate() {
             let e = &entries[k as usize];
             match hit {
                 None if on_object[i] => {}
-                None => {
-                    let l = self.miss(&e.ray, e.in_water, segment, settings, c);
-                    out[k as usize] =
-                        self.weigh_sun(e.ray.org.into(), e.ray.dir.into(), e.sun_pdf, l);
-                }
+                None => match self.miss(&e.ray, e.in_water, segment, settings, c) {
+                    Some(l) => {
+                        out[k as usize] =
+                            self.weigh_sun(e.ray.org.into(), e.ray.dir.into(), e.sun_pdf, l)
+                    }
+                    None => _ = sky_misses.push(k),
+                },
                 Some(hit) => {
                     c.hits += 1;
                     // A planar triangle cannot meet a ray leaving it twice: this is rounding.
@@ -428,6 +432,21 @@ impl SceneRef<'_> {
                     let slot = shaded.push((k, Scatter::NONE));
                     self.scatter(&e.ray, hit, shading, settings, rng, c, &mut slot.1);
                 }
+            }
+        }
+        let sky_misses = sky_misses.as_slice();
+        if !sky_misses.is_empty() {
+            let n = sky_misses.len();
+            let (mut orgs, mut dirs) = ([Vec3::ZERO; CAMERA_BATCH], [Vec3::ZERO; CAMERA_BATCH]);
+            for (j, &k) in sky_misses.iter().enumerate() {
+                let ray = &entries[k as usize].ray;
+                (orgs[j], dirs[j]) = (ray.org.into(), ray.dir.into());
+            }
+            let mut l = [Vec3::ZERO; CAMERA_BATCH];
+            self.sky.radiance_many(&orgs[..n], &dirs[..n], &mut l[..n]);
+            for (j, &k) in sky_misses.iter().enumerate() {
+                let sun_pdf = entries[k as usize].sun_pdf;
+                out[k as usize] = self.weigh_sun(orgs[j], dirs[j], sun_pdf, l[j]);
             }
         }
         let shaded = shaded.as_slice();

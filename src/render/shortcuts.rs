@@ -126,7 +126,8 @@ impl SceneRef<'_> {
         Untraced::Trace
     }
 
-    /// What a traced ray that met nothing sees: the sky, or in the water the upwelling light.
+    /// What a traced ray that met nothing sees in the water: the upwelling light; `None` in
+    /// the air, where it sees the sky, which the caller looks up for all its misses together.
     pub(super) fn miss(
         &self,
         ray: &Ray,
@@ -134,16 +135,12 @@ impl SceneRef<'_> {
         segment: u32,
         settings: &TraceSettings,
         c: &mut Counters,
-    ) -> Vec3 {
+    ) -> Option<Vec3> {
         let d = Vec3::from(ray.dir);
         if segment == 0 && !in_water && d.y < settings.must_hit_below_y {
             c.escaped_below_horizon += 1;
         }
-        if in_water {
-            Vec3::from(settings.upwelling)
-        } else {
-            self.sky.radiance(Vec3::from(ray.org), d)
-        }
+        in_water.then_some(Vec3::from(settings.upwelling))
     }
 }
 
