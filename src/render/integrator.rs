@@ -398,7 +398,9 @@ impl SceneRef<'_> {
             &mut normals[..m],
             &mut rough[..m],
         );
-        let mut shaded = Slots::<(u8, Scatter), CAMERA_BATCH>::new();
+        // the shaded hits' entries, and their scattering, written in place by `scatter`
+        let mut shaded_k = Slots::<u8, CAMERA_BATCH>::new();
+        let mut shaded = Slots::<Scatter, CAMERA_BATCH>::new();
         // The misses into the sky, looked up together as the untraced rays' are.
         let mut sky_misses = Slots::<u8, CAMERA_BATCH>::new();
         for (i, (&k, hit)) in traced_entry[..m].iter().zip(&hits[..m]).enumerate() {
@@ -410,7 +412,7 @@ impl SceneRef<'_> {
                         out[k as usize] =
                             self.weigh_sun(e.ray.org.into(), e.ray.dir.into(), e.sun_pdf, l)
                     }
-                    None => _ = sky_misses.push(k),
+                    None => sky_misses.push(k),
                 },
                 Some(hit) => {
                     c.hits += 1;
@@ -429,8 +431,10 @@ impl SceneRef<'_> {
                         segment,
                     };
                     let rng = &mut rngs[e.sample as usize];
-                    let slot = shaded.push((k, Scatter::NONE));
-                    self.scatter(&e.ray, hit, shading, settings, rng, c, &mut slot.1);
+                    shaded_k.push(k);
+                    shaded.push_with(|slot| {
+                        self.scatter(&e.ray, hit, shading, settings, rng, c, slot)
+                    });
                 }
             }
         }
@@ -449,7 +453,7 @@ impl SceneRef<'_> {
                 out[k as usize] = self.weigh_sun(orgs[j], dirs[j], sun_pdf, l[j]);
             }
         }
-        let shaded = shaded.as_slice();
+        let (shaded_k, shaded) = (shaded_k.as_slice(), shaded.as_slice());
         let n_shaded = shaded.len();
         let mut objects = Slots::<(u8, ObjectScatter), CAMERA_BATCH>::new();
         for &k in &object_entry[..n_object] {
@@ -474,7 +478,7 @@ impl SceneRef<'_> {
         let objects = objects.as_slice();
         // Nodes 0..n_shaded are the sea's hits, the objects' follow.
         let mut suns = [None; CAMERA_BATCH];
-        for (sun, s) in suns.iter_mut().zip(shaded.iter().map(|(_, s)| s.sun)) {
+        for (sun, s) in suns.iter_mut().zip(shaded.iter().map(|s| s.sun)) {
             *sun = s;
         }
         for (sun, (_, o)) in suns[n_shaded..].iter_mut().zip(objects) {
@@ -487,7 +491,7 @@ impl SceneRef<'_> {
         let mut first = [None; CAMERA_BATCH];
         let mut second = [None; CAMERA_BATCH];
         let mut both = [false; CAMERA_BATCH];
-        for (j, (k, s)) in shaded.iter().enumerate() {
+        for (j, (k, s)) in shaded_k.iter().zip(shaded).enumerate() {
             let rng = &mut rngs[entries[*k as usize].sample as usize];
             (first[j], second[j], both[j]) = branches(s, segment, settings, rng);
         }
@@ -517,7 +521,7 @@ impl SceneRef<'_> {
                 of[b] = (n_shaded + jo) as u8;
                 b += 1;
             }
-            for (j, (k, s)) in shaded.iter().enumerate() {
+            for (j, (k, s)) in shaded_k.iter().zip(shaded).enumerate() {
                 if let Some((w, in_water, _, sun_pdf)) = dirs[j] {
                     batch[b] = PathVertex {
                         ray: s.sp.spawn(w),
@@ -550,7 +554,7 @@ impl SceneRef<'_> {
                 }
             }
         }
-        for (j, (k, s)) in shaded.iter().enumerate() {
+        for (j, (k, s)) in shaded_k.iter().zip(shaded).enumerate() {
             let l = if both[j] {
                 s.fresnel * l_first[j] + (1.0 - s.fresnel) * l_second[j]
             } else {
