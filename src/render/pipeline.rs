@@ -178,7 +178,14 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
     let pool = tracing_pool(cfg.render.threads)?;
     let threads = pool.current_num_threads();
     // A sky map is read on a thread of its own while the ocean is built: its read is serial
-    // (20 ms for a 2048 x 1024 map), and the ocean's transforms leave gaps on a core.
+    // (20 ms for a 2048 x 1024 map), and the ocean's transforms leave gaps on a core. One that
+    // cannot be opened is said at once, not after the ocean's build.
+    if let (None, Some(path)) = (&shared_sky, &cfg.sky.file) {
+        std::fs::File::open(path).map_err(|e| crate::image_io::ImageError::Read {
+            path: path.clone(),
+            message: e.to_string(),
+        })?;
+    }
     let (sky, built) = std::thread::scope(|s| {
         let sky = s.spawn(|| match shared_sky {
             Some(sky) => Ok(sky),
