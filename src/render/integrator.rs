@@ -284,9 +284,7 @@ impl SceneRef<'_> {
         let mut traced = [PathVertex::NONE.ray; CAMERA_BATCH];
         let mut traced_entry = [0u8; CAMERA_BATCH];
         let mut m = 0;
-        let (mut sky_org, mut sky_dir) = ([Vec3::ZERO; CAMERA_BATCH], [Vec3::ZERO; CAMERA_BATCH]);
-        let mut sky_entry = [0u8; CAMERA_BATCH];
-        let mut n_sky = 0;
+        let mut sky_entry = Slots::<u8, CAMERA_BATCH>::new();
         for (k, e) in entries.iter().enumerate() {
             let answer = if e.in_object {
                 // inside glass: its own surface ahead, or (at the path's end, or through a
@@ -305,11 +303,7 @@ impl SceneRef<'_> {
                     n_object += 1;
                 }
                 (Untraced::Known(l), None) => out[k] = l,
-                (Untraced::Sky, None) => {
-                    (sky_org[n_sky], sky_dir[n_sky]) = (e.ray.org.into(), e.ray.dir.into());
-                    sky_entry[n_sky] = k as u8;
-                    n_sky += 1;
-                }
+                (Untraced::Sky, None) => sky_entry.push(k as u8),
                 (Untraced::Trace, object) => {
                     traced[m] = e.ray;
                     if let Some(h) = object {
@@ -321,15 +315,7 @@ impl SceneRef<'_> {
                 }
             }
         }
-        if n_sky > 0 {
-            let mut l = [Vec3::ZERO; CAMERA_BATCH];
-            let (orgs, dirs) = (&sky_org[..n_sky], &sky_dir[..n_sky]);
-            self.sky.radiance_many(orgs, dirs, &mut l[..n_sky]);
-            for (&k, &l) in sky_entry[..n_sky].iter().zip(&l) {
-                let e = &entries[k as usize];
-                out[k as usize] = self.weigh_sun(e.ray.org.into(), e.ray.dir.into(), e.sun_pdf, l);
-            }
-        }
+        self.sky_along(entries, sky_entry.as_slice(), out);
         if m == 0 && n_object == 0 {
             return;
         }
@@ -401,7 +387,7 @@ impl SceneRef<'_> {
         // the shaded hits' entries, and their scattering, written in place by `scatter`
         let mut shaded_k = Slots::<u8, CAMERA_BATCH>::new();
         let mut shaded = Slots::<Scatter, CAMERA_BATCH>::new();
-        // The misses into the sky, looked up together as the untraced rays' are.
+        // the misses into the sky, looked up together as the untraced rays' are
         let mut sky_misses = Slots::<u8, CAMERA_BATCH>::new();
         for (i, (&k, hit)) in traced_entry[..m].iter().zip(&hits[..m]).enumerate() {
             let e = &entries[k as usize];
@@ -438,21 +424,7 @@ impl SceneRef<'_> {
                 }
             }
         }
-        let sky_misses = sky_misses.as_slice();
-        if !sky_misses.is_empty() {
-            let n = sky_misses.len();
-            let (mut orgs, mut dirs) = ([Vec3::ZERO; CAMERA_BATCH], [Vec3::ZERO; CAMERA_BATCH]);
-            for (j, &k) in sky_misses.iter().enumerate() {
-                let ray = &entries[k as usize].ray;
-                (orgs[j], dirs[j]) = (ray.org.into(), ray.dir.into());
-            }
-            let mut l = [Vec3::ZERO; CAMERA_BATCH];
-            self.sky.radiance_many(&orgs[..n], &dirs[..n], &mut l[..n]);
-            for (j, &k) in sky_misses.iter().enumerate() {
-                let sun_pdf = entries[k as usize].sun_pdf;
-                out[k as usize] = self.weigh_sun(orgs[j], dirs[j], sun_pdf, l[j]);
-            }
-        }
+        self.sky_along(entries, sky_misses.as_slice(), out);
         let (shaded_k, shaded) = (shaded_k.as_slice(), shaded.as_slice());
         let n_shaded = shaded.len();
         let mut objects = Slots::<(u8, ObjectScatter), CAMERA_BATCH>::new();
@@ -572,8 +544,8 @@ impl SceneRef<'_> {
 /// One ray of a batch in [`SceneRef::radiance_batch`]: sample `sample`'s ray, spawned on
 /// triangle `parent` (none for a camera ray), travelling in the water or the air.
 #[derive(Clone, Copy)]
-struct PathVertex {
-    ray: Ray,
+pub(super) struct PathVertex {
+    pub(super) ray: Ray,
     sample: u8,
     parent: Option<u32>,
     in_water: bool,
@@ -583,7 +555,7 @@ struct PathVertex {
     width_m: f32,
     /// The density with which a rough hit that sampled the sun chose this ray's direction: the
     /// sun the ray sees directly is weighed against the sun's own samples (0: full weight).
-    sun_pdf: f32,
+    pub(super) sun_pdf: f32,
 }
 
 impl PathVertex {

@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use super::counters::Counters;
-use super::integrator::{SceneRef, TraceSettings};
+use super::integrator::{CAMERA_BATCH, PathVertex, SceneRef, TraceSettings};
 use crate::accel::{Hit, Ray};
 use crate::mesh::Mesh;
 
@@ -124,6 +124,23 @@ impl SceneRef<'_> {
         }
         c.rays += 1;
         Untraced::Trace
+    }
+
+    /// The sky along the rays `entries[k]` for each `k` in `ks` (at most a batch), looked up
+    /// together in the sky's lanes and weighed against the sun's samples, into `out[k]`.
+    pub(super) fn sky_along(&self, entries: &[PathVertex], ks: &[u8], out: &mut [Vec3]) {
+        let n = ks.len();
+        let (mut orgs, mut dirs) = ([Vec3::ZERO; CAMERA_BATCH], [Vec3::ZERO; CAMERA_BATCH]);
+        for (j, &k) in ks.iter().enumerate() {
+            let ray = &entries[k as usize].ray;
+            (orgs[j], dirs[j]) = (ray.org.into(), ray.dir.into());
+        }
+        let mut l = [Vec3::ZERO; CAMERA_BATCH];
+        self.sky.radiance_many(&orgs[..n], &dirs[..n], &mut l[..n]);
+        for (j, &k) in ks.iter().enumerate() {
+            let sun_pdf = entries[k as usize].sun_pdf;
+            out[k as usize] = self.weigh_sun(orgs[j], dirs[j], sun_pdf, l[j]);
+        }
     }
 
     /// What a traced ray that met nothing sees in the water: the upwelling light; `None` in
