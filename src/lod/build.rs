@@ -5,7 +5,7 @@
 use rayon::prelude::*;
 
 use super::grid::{Geometry, V};
-use super::{LodError, LodParams, MAX_TRIANGLES, RingStats, earth::curved_frame_point};
+use super::{LodError, LodParams, MAX_TRIANGLES, RingStats, displace_into};
 use crate::mesh::{Mesh, MeshError};
 use crate::ocean::Sampler;
 
@@ -121,14 +121,10 @@ impl Geometry {
                         continue;
                     }
                     let (x, zz) = ((xi as i64 - r.b) as f64 * r.size, z as f64 * r.size);
-                    let (u, w) = (x as f32, zz as f32);
-                    let sample = sampler.sample(u, w);
-                    let (p, nn) = curved_frame_point(u as f64, w as f64, &sample, earth_r);
-                    pos[n] = p.map(|c| c as f32);
-                    nrm[n] = nn.map(|c| c as f32);
-                    uv[n] = [u, w];
+                    uv[n] = [x as f32, zz as f32];
                     n += 1;
                 }
+                displace_into(uv, sampler, earth_r, pos, nrm);
             });
         Attributes {
             positions,

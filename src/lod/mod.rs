@@ -50,7 +50,7 @@ use thiserror::Error;
 
 use crate::config::{CameraConfig, LodChoice, LodConfig, Projection};
 use crate::mesh::{Mesh, MeshError};
-use crate::ocean::Sampler;
+use crate::ocean::{Sample, Sampler};
 
 pub use crate::config::lod::{Pattern, Reading};
 
@@ -354,13 +354,40 @@ pub fn displace(
     earth_radius_m: f64,
 ) -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
     use rayon::prelude::*;
-    uvs.par_iter()
-        .map(|&[u, w]| {
-            let sample = sampler.sample(u, w);
-            let (p, n) = curved_frame_point(u as f64, w as f64, &sample, earth_radius_m);
-            (p.map(|c| c as f32), n.map(|c| c as f32))
-        })
-        .unzip()
+    let mut positions = vec![[0.0f32; 3]; uvs.len()];
+    let mut normals = vec![[0.0f32; 3]; uvs.len()];
+    const CHUNK: usize = 4096;
+    uvs.par_chunks(CHUNK)
+        .zip(positions.par_chunks_mut(CHUNK))
+        .zip(normals.par_chunks_mut(CHUNK))
+        .for_each(|((uv, pos), nrm)| displace_into(uv, sampler, earth_radius_m, pos, nrm));
+    (positions, normals)
+}
+
+/// The displaced position and normal at each nominal position `uvs[i]` into `positions[i]` and
+/// `normals[i]`: the layers read for 64 points at a time ([`Sampler::samples`]), bit for bit
+/// one by one.
+pub(crate) fn displace_into(
+    uvs: &[[f32; 2]],
+    sampler: &Sampler,
+    earth_radius_m: f64,
+    positions: &mut [[f32; 3]],
+    normals: &mut [[f32; 3]],
+) {
+    let mut samples = [Sample::FLAT; 64];
+    for ((uv, pos), nrm) in uvs
+        .chunks(64)
+        .zip(positions.chunks_mut(64))
+        .zip(normals.chunks_mut(64))
+    {
+        let samples = &mut samples[..uv.len()];
+        sampler.samples(uv, samples);
+        for (((&[u, w], s), p), n) in uv.iter().zip(&*samples).zip(pos).zip(nrm) {
+            let (pp, nn) = curved_frame_point(u as f64, w as f64, s, earth_radius_m);
+            *p = pp.map(|c| c as f32);
+            *n = nn.map(|c| c as f32);
+        }
+    }
 }
 
 /// The exact number of triangles [`tessellate`] would build, without building anything.

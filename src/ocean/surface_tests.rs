@@ -29,8 +29,10 @@ pub(super) fn small(seed: u64) -> Surface {
     Surface::new(&p, seed).unwrap()
 }
 
+/// [`Sampler::normals`] and [`Sampler::samples`] read eight points at a time: each is what one
+/// point's read gives, bit for bit.
 #[test]
-fn normals_in_lanes_are_the_normals_one_at_a_time() {
+fn normals_and_samples_in_lanes_are_those_one_at_a_time() {
     let s = small(5);
     let mut points = Vec::new();
     // scattered points, either sign, near and far
@@ -57,13 +59,22 @@ fn normals_in_lanes_are_the_normals_one_at_a_time() {
         for points in cases.into_iter().chain([&far_x[..], &far_z[..], &nan[..]]) {
             let mut lanes = vec![[9.0f32; 3]; points.len()];
             sampler.normals(points, &mut lanes);
-            for (p, n) in points.iter().zip(&lanes) {
+            let mut samples = vec![Sample::FLAT; points.len()];
+            sampler.samples(points, &mut samples);
+            for ((p, n), s) in points.iter().zip(&lanes).zip(&samples) {
                 let one = sampler.normal(p[0], p[1]);
                 assert_eq!(
                     n.map(f32::to_bits),
                     one.map(f32::to_bits),
                     "{interp:?} at {p:?}"
                 );
+                let one = sampler.sample(p[0], p[1]);
+                let bits = |s: &Sample| {
+                    let [a, b] = s.disp.map(f32::to_bits);
+                    let [c, d, e] = s.normal.map(f32::to_bits);
+                    [s.height.to_bits(), a, b, c, d, e, s.jacobian.to_bits()]
+                };
+                assert_eq!(bits(s), bits(&one), "{interp:?} sample at {p:?}");
             }
         }
     }
