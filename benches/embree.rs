@@ -31,6 +31,7 @@ fn build(c: &mut Criterion) {
                                 quality,
                                 compact: false,
                                 robust: true,
+                                grids: false,
                             },
                         )
                         .unwrap()

@@ -11,6 +11,9 @@
 
 use thiserror::Error;
 
+mod strips;
+pub use strips::{MAX_STRIP_CELLS, Strip};
+
 use crate::image_io::{WriteError, write_atomically};
 
 #[derive(Debug, Error, PartialEq)]
@@ -33,6 +36,8 @@ pub enum MeshError {
     },
     #[error("mesh has {0} vertices; indices are u32, so at most 4294967295")]
     TooManyVertices(usize),
+    #[error("strip {0} does not match the mesh's triangles")]
+    BadStrip(usize),
 }
 
 /// An immutable, validated triangle mesh. Fields are private so the padding and validation
@@ -43,6 +48,8 @@ pub struct Mesh {
     normals: Vec<[f32; 3]>,
     uvs: Padded<[f32; 2]>,
     indices: Vec<[u32; 3]>,
+    /// Rows of whole cells that may be traced as grids ([`Strip`]; empty for most meshes).
+    strips: Vec<Strip>,
 }
 
 /// A buffer whose allocation holds at least one initialised element past its length, so a
@@ -124,6 +131,7 @@ impl Mesh {
             normals,
             uvs: Padded::new(uvs),
             indices,
+            strips: Vec::new(),
         })
     }
 
@@ -237,6 +245,7 @@ impl Mesh {
             + size_of_val(self.normals.as_slice())
             + size_of_val(&*self.uvs)
             + size_of_val(self.indices.as_slice())
+            + size_of_val(self.strips.as_slice())
     }
 
     /// Whether the position and uv allocations extend past their last element (see module doc).

@@ -225,6 +225,7 @@ fn every_build_quality_traces_the_same_hits() {
                     quality,
                     compact,
                     robust: true,
+                    ..BuildOptions::default()
                 },
             )
             .unwrap();

@@ -547,6 +547,116 @@ fn rays_straight_down_never_fall_through_the_displaced_mesh() {
     assert!(misses.is_empty(), "rays fell through at {misses:?}");
 }
 
+/// Every tessellation's whole cells come as strips ([`vastocean::mesh::Strip`], checked
+/// against the triangles when the mesh is made): no triangle is in two strips, and the strips
+/// hold every triangle but those of the cells touching a coarser ring's hole.
+#[test]
+fn strips_hold_every_whole_cell_once() {
+    let flat = Surface::flat();
+    let sampler = flat.sampler([0.0, 0.0]);
+    for (name, params) in configs() {
+        let (mesh, _) = tessellate(&params, &sampler).unwrap();
+        let mut seen = vec![false; mesh.triangle_count()];
+        for s in mesh.strips() {
+            let first = s.first_triangle as usize;
+            for (t, seen) in seen
+                .iter_mut()
+                .enumerate()
+                .skip(first)
+                .take(2 * usize::from(s.cells))
+            {
+                assert!(!*seen, "{name}: triangle {t} in two strips");
+                *seen = true;
+            }
+        }
+        let outside = seen.iter().filter(|&&b| !b).count();
+        // the cells along each hole: three triangles each, and two whole cells at each corner
+        let sides: usize = lod::rings(&params)
+            .unwrap()
+            .iter()
+            .skip(1)
+            .map(|&(size, inner, _)| 4 * (3 * (2.0 * inner / size).round() as usize + 2 * 2))
+            .sum();
+        assert!(
+            outside <= sides,
+            "{name}: {outside} triangles outside the strips, at most {sides} expected"
+        );
+        assert!(!mesh.strips().is_empty(), "{name}: no strips");
+    }
+}
+
+/// Embree traces a tessellation's strips as grids: the same hits as its triangles give (the
+/// same triangle, t and barycentrics within f32 rounding), bar rays through an edge.
+#[cfg(feature = "embree")]
+#[test]
+fn a_tessellation_traced_as_grids_hits_what_its_triangles_do() {
+    use std::sync::Arc;
+    use vastocean::accel::embree::{BuildOptions, Device, Scene};
+    use vastocean::accel::{Accel, Ray};
+    use vastocean::rng::Rng;
+
+    let ocean = small_ocean();
+    let sampler = ocean.sampler([-3210.0, 777.0]);
+    let params = small(Reading::Nested, Pattern::Square, 60.0);
+    let (mesh, _) = tessellate(&params, &sampler).unwrap();
+    let mesh = Arc::new(mesh);
+    let device = Device::new(2).expect("Embree device");
+    let scene = |grids| {
+        let options = BuildOptions {
+            grids,
+            ..BuildOptions::default()
+        };
+        Scene::new(&device, mesh.clone(), options).unwrap()
+    };
+    let (grids, triangles) = (scene(true), scene(false));
+    let mut rng = Rng::keyed(&[43, 0x6c6f64]);
+    // from 2 m up in every direction below the horizon, grazing ones included
+    let rays: Vec<Ray> = (0..100_000)
+        .map(|_| {
+            let el = -(1e-3 + 0.5 * rng.f32()).powi(2) * 3.0;
+            let az = std::f32::consts::TAU * rng.f32();
+            let d = [el.cos() * az.cos(), el.sin(), el.cos() * az.sin()];
+            Ray::new([rng.f32() - 0.5, 2.0, rng.f32() - 0.5], d)
+        })
+        .collect();
+    let (mut a, mut b) = (vec![None; rays.len()], vec![None; rays.len()]);
+    grids.intersect_many(&rays, &mut a);
+    triangles.intersect_many(&rays, &mut b);
+    let (mut hits, mut edges) = (0, 0);
+    for (ray, (g, t)) in rays.iter().zip(a.iter().zip(&b)) {
+        match (g, t) {
+            (Some(g), Some(t)) if g.prim == t.prim => {
+                hits += 1;
+                assert!(
+                    (g.t - t.t).abs() <= 1e-5 * t.t,
+                    "{ray:?}: t {} vs {}",
+                    g.t,
+                    t.t
+                );
+                assert!(
+                    (g.u - t.u).abs() < 1e-4 && (g.v - t.v).abs() < 1e-4,
+                    "{ray:?}: barycentrics ({}, {}) vs ({}, {})",
+                    g.u,
+                    g.v,
+                    t.u,
+                    t.v
+                );
+                let (pu, pt) = (grids.interpolate_uv(g), triangles.interpolate_uv(t));
+                assert!((pu[0] - pt[0]).abs() < 1e-3 && (pu[1] - pt[1]).abs() < 1e-3);
+            }
+            (None, None) => {}
+            // a ray through an edge or a vertex may meet either side
+            (Some(h), _) | (None, Some(h)) => {
+                let near_edge = h.u.min(h.v).min(1.0 - h.u - h.v) < 1e-4;
+                assert!(near_edge, "{ray:?}: grids {g:?}, triangles {t:?}");
+                edges += 1;
+            }
+        }
+    }
+    assert!(hits > 60_000, "{hits} rays hit the sea");
+    assert!(edges < 50, "{edges} rays through edges");
+}
+
 #[test]
 fn ply_round_trip() {
     let flat = Surface::flat();

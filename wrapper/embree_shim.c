@@ -198,6 +198,32 @@ void *vo_scene_attach_triangles(void *device, void *scene, vo_quality quality, c
   return g;
 }
 
+void *vo_scene_attach_grids(void *device, void *scene, vo_quality quality, const float *positions,
+                            size_t vertex_count, const vo_grid *grids, size_t grid_count, uint32_t *geom_id) {
+  RTCGeometry g = rtcNewGeometry(vo_raw(device), RTC_GEOMETRY_TYPE_GRID);
+  if (!g) return NULL;
+  rtcSetGeometryBuildQuality(g, vo_rtc_quality(quality));
+  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, positions, 0, 3 * sizeof(float),
+                             vertex_count);
+  struct RTCGrid *out = (struct RTCGrid *)rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_GRID, 0, RTC_FORMAT_GRID,
+                                                                  sizeof(struct RTCGrid), grid_count);
+  if (!out) {
+    rtcReleaseGeometry(g);
+    return NULL;
+  }
+  for (size_t i = 0; i < grid_count; i++) {
+    out[i].startVertexID = grids[i].start;
+    out[i].stride = grids[i].stride;
+    out[i].width = grids[i].width;
+    out[i].height = grids[i].height;
+  }
+  rtcCommitGeometry(g);
+  unsigned id = rtcAttachGeometry((RTCScene)scene, g);
+  rtcReleaseGeometry(g);
+  if (geom_id) *geom_id = id;
+  return g;
+}
+
 void *vo_scene_attach_instance(void *device, void *scene, void *child, const float xfm[12], uint32_t *geom_id) {
   RTCGeometry g = rtcNewGeometry(vo_raw(device), RTC_GEOMETRY_TYPE_INSTANCE);
   if (!g) return NULL;
@@ -213,9 +239,13 @@ void *vo_scene_attach_instance(void *device, void *scene, void *child, const flo
 
 void vo_scene_commit(void *scene) { rtcCommitScene((RTCScene)scene); }
 
-void vo_scene_refit(void *scene, void *geometry) {
+void vo_scene_refit(void *scene, void *geometry, void *second) {
   rtcUpdateGeometryBuffer((RTCGeometry)geometry, RTC_BUFFER_TYPE_VERTEX, 0);
   rtcCommitGeometry((RTCGeometry)geometry);
+  if (second) {
+    rtcUpdateGeometryBuffer((RTCGeometry)second, RTC_BUFFER_TYPE_VERTEX, 0);
+    rtcCommitGeometry((RTCGeometry)second);
+  }
   rtcCommitScene((RTCScene)scene);
 }
 

@@ -97,6 +97,22 @@ void vo_scene_release(void *scene);
 void *vo_scene_attach_triangles(void *device, void *scene, vo_quality quality, const float *positions,
                                 size_t vertex_count, const uint32_t *indices, size_t triangle_count,
                                 const float *uvs, uint32_t *geom_id);
+/* One grid of a grid geometry (Embree's RTCGrid): width x height vertices, the first at
+ * `start`, each row `stride` vertices after the one before. */
+typedef struct vo_grid {
+  uint32_t start;
+  uint32_t stride;
+  uint16_t width;
+  uint16_t height;
+} vo_grid;
+/* Attaches a grid geometry (RTC_GEOMETRY_TYPE_GRID) over caller-owned vertices (shared, as for
+ * triangles; the grids are copied) and commits it. A hit on it reports the grid as prim and
+ * (u, v) from 0 to 1 across the whole grid (u along a row, v down the rows); each quad is split
+ * into the triangles (v0, v1, v3) and (v2, v3, v1), v0 its first row's first vertex, v1 the
+ * next, v2 and v3 the vertices below them. Returns the geometry handle (owned by the scene) or
+ * NULL on error; *geom_id receives its id. */
+void *vo_scene_attach_grids(void *device, void *scene, vo_quality quality, const float *positions,
+                            size_t vertex_count, const vo_grid *grids, size_t grid_count, uint32_t *geom_id);
 /* Attaches an instance of the committed scene `child` (which must outlive `scene`), placed by
  * the affine transform xfm (3x4, column-major: the three columns of the linear part, then the
  * translation; from the child's space into the scene's), and commits the geometry. Returns the
@@ -104,10 +120,11 @@ void *vo_scene_attach_triangles(void *device, void *scene, vo_quality quality, c
  * inside it report as their inst. */
 void *vo_scene_attach_instance(void *device, void *scene, void *child, const float xfm[12], uint32_t *geom_id);
 void vo_scene_commit(void *scene);
-/* After the caller changed the vertex buffer in place: tells Embree, commits the geometry and
- * the scene. With the geometry attached at VO_QUALITY_REFIT, Embree refits the BVH's bounds
- * instead of rebuilding it. */
-void vo_scene_refit(void *scene, void *geometry);
+/* After the caller changed the vertex buffer in place: tells Embree, commits the geometry (and
+ * `second`, another geometry over the same vertices, unless NULL) and the scene. With the
+ * geometry attached at VO_QUALITY_REFIT, Embree refits the BVH's bounds instead of rebuilding
+ * it. */
+void vo_scene_refit(void *scene, void *geometry, void *second);
 void vo_scene_bounds(void *scene, float lower[3], float upper[3]);
 
 /* User geometry: primitives the caller bounds and intersects itself (the exact ocean surface's

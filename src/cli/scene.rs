@@ -81,6 +81,10 @@ pub struct SceneFlags {
     /// piz or zip (smaller; noisy renders shrink little: docs/performance.md, "Output").
     #[arg(long, value_parser = choice::<vastocean::config::ExrCompression>())]
     exr_compression: Option<vastocean::config::ExrCompression>,
+    /// Embree: the ocean mesh's whole cells as grids or triangles (the same triangles);
+    /// `auto` takes grids for meshes that are large against the samples traced
+    #[arg(long, value_parser = choice::<vastocean::config::EmbreeGeometry>())]
+    embree_geometry: Option<vastocean::config::EmbreeGeometry>,
 }
 
 impl SceneFlags {
@@ -117,6 +121,11 @@ impl SceneFlags {
                 self.exr_compression.is_some(),
                 "render.exr_compression",
                 "--exr-compression",
+            ),
+            (
+                self.embree_geometry.is_some(),
+                "render.embree_geometry",
+                "--embree-geometry",
             ),
         ];
         set.into_iter()
@@ -182,6 +191,7 @@ impl SceneFlags {
         s.render.wrong_side = self.wrong_side.unwrap_or(s.render.wrong_side);
         s.ocean.interp = self.interp.unwrap_or(s.ocean.interp);
         s.render.exr_compression = self.exr_compression.unwrap_or(s.render.exr_compression);
+        s.render.embree_geometry = self.embree_geometry.unwrap_or(s.render.embree_geometry);
         Ok(s)
     }
 }

@@ -24,8 +24,8 @@ pub use lod::{LodChoice, LodConfig, Pattern, Reading};
 pub use objects::{Material, ObjectConfig, ShipConfig};
 pub use ocean::OceanParams;
 pub use render::{
-    Aov, Backend, ExrCompression, FilterLobe, NormalMode, RenderConfig, SurfaceKind, Water,
-    WrongSide,
+    Aov, Backend, EmbreeGeometry, ExrCompression, FilterLobe, NormalMode, RenderConfig,
+    SurfaceKind, Water, WrongSide,
 };
 pub use sky::{AnalyticSky, SkyConfig};
 

@@ -4,9 +4,9 @@
 
 use rayon::prelude::*;
 
-use super::grid::{Geometry, V};
+use super::grid::{Geometry, Unit, V};
 use super::{LodError, LodParams, MAX_TRIANGLES, RingStats, displace_into};
-use crate::mesh::{Mesh, MeshError};
+use crate::mesh::{MAX_STRIP_CELLS, Mesh, MeshError, Strip};
 use crate::ocean::Sampler;
 
 /// Vertex numbering: per ring, a dense array over its (2b+1)^2 grid points (`u32::MAX` where
@@ -34,9 +34,73 @@ impl Geometry {
         let attrs = self.attributes(&vi, params.earth_radius_m, sampler);
         let (indices, tri_counts) = self.triangles(&vi.index)?;
         let per_ring = self.ring_stats(&tri_counts);
+        let strips = self.strips(&vi.index, &tri_counts);
         drop(vi);
-        let mesh = Mesh::new(attrs.positions, attrs.normals, attrs.uvs, indices)?;
+        let mesh =
+            Mesh::new(attrs.positions, attrs.normals, attrs.uvs, indices)?.with_strips(strips)?;
         Ok((mesh, per_ring))
+    }
+
+    /// The runs of whole cells in each cell row ([`Strip`]): cells none of whose corners lies
+    /// on the hole of its ring (those are the finer ring's vertices), at most
+    /// [`MAX_STRIP_CELLS`] to a strip. `tri_counts` are the triangles of each cell row.
+    fn strips(&self, index: &[Vec<u32>], tri_counts: &[usize]) -> Vec<Strip> {
+        let cell_rows = self.cell_rows();
+        let mut bases = Vec::with_capacity(tri_counts.len());
+        let mut acc = 0usize;
+        for &c in tri_counts {
+            bases.push(acc as u32);
+            acc += c;
+        }
+        let rows: Vec<Vec<Strip>> = cell_rows
+            .par_iter()
+            .zip(&bases)
+            .map(|(&(k, j), &base)| {
+                let r = &self.rings[k];
+                let side = 2 * r.b + 1;
+                let at = |x: i64, z: i64| index[k][((z + r.b) * side + x + r.b) as usize];
+                let own = |x: i64, z: i64| k == 0 || x.abs().max(z.abs()) != r.a;
+                let mut out: Vec<Strip> = Vec::new();
+                let mut t = base;
+                // the strip being grown, and the cell that would extend it
+                let mut open: Option<i64> = None;
+                self.row_units(k, j, |u| {
+                    let here = t;
+                    t += Self::unit_tri_count(u) as u32;
+                    let Unit::Cell((i, _)) = u else {
+                        open = None;
+                        return;
+                    };
+                    let whole = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)]
+                        .iter()
+                        .all(|&(x, z)| own(x, z));
+                    let (up, low) = (at(i, j + 1), at(i, j));
+                    if !whole || at(i + 1, j + 1) != up + 1 || at(i + 1, j) != low + 1 || low <= up
+                    {
+                        open = None;
+                        return;
+                    }
+                    if let (Some(next), Some(s)) = (open, out.last_mut())
+                        && next == i
+                        && s.cells < MAX_STRIP_CELLS
+                        && up == s.start + u32::from(s.cells)
+                        && low - up == s.stride
+                    {
+                        s.cells += 1;
+                    } else {
+                        out.push(Strip {
+                            start: up,
+                            stride: low - up,
+                            cells: 1,
+                            first_triangle: here,
+                        });
+                    }
+                    open = Some(i + 1);
+                });
+                out
+            })
+            .collect();
+        rows.concat()
     }
 
     /// Numbers the used grid points in (ring, row) order, rows counted in parallel.
@@ -49,7 +113,7 @@ impl Geometry {
         let mut row_counts: Vec<usize> = Vec::new();
         for (k, (r, arr)) in self.rings.iter().zip(index.iter_mut()).enumerate() {
             let side = (2 * r.b + 1) as usize;
-            let counts: Vec<usize> = arr
+            let mut counts: Vec<usize> = arr
                 .par_chunks_mut(side)
                 .enumerate()
                 .map(|(row, out)| {
@@ -66,6 +130,9 @@ impl Geometry {
                     n as usize
                 })
                 .collect();
+            // numbered from the ring's top row (largest z) down, as `point_rows` lists them:
+            // a cell's upper row then comes first, the layout of Embree's grids
+            counts.reverse();
             row_counts.extend(counts);
         }
         let vertices: usize = row_counts.iter().sum();
@@ -83,11 +150,14 @@ impl Geometry {
         for (r, arr) in self.rings.iter().zip(index.iter_mut()) {
             let side = (2 * r.b + 1) as usize;
             let b = &bases[at..at + side];
-            arr.par_chunks_mut(side).zip(b).for_each(|(row, &base)| {
-                for v in row.iter_mut().filter(|v| **v != u32::MAX) {
-                    *v += base;
-                }
-            });
+            // (the array's rows run up in z, the bases down)
+            arr.par_chunks_mut(side)
+                .zip(b.par_iter().rev())
+                .for_each(|(row, &base)| {
+                    for v in row.iter_mut().filter(|v| **v != u32::MAX) {
+                        *v += base;
+                    }
+                });
             at += side;
         }
         Ok(VertexIndex { index, row_counts })

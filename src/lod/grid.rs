@@ -10,7 +10,8 @@
 //! opens no crack). That adds one triangle per boundary cell, which is what makes the paper's
 //! counts come out exactly (see the module doc of `lod`). Cells are culled by distance and, for
 //! the frustum pattern, by angle; every cell's triangles span only that cell, so any set of kept
-//! cells is conforming. Vertices get indices in (ring, row) order; rows are built in parallel.
+//! cells is conforming. Vertices get indices in (ring, row) order, each ring's rows from the top
+//! (largest z) down; rows are built in parallel.
 
 use rayon::prelude::*;
 
@@ -427,11 +428,13 @@ impl Geometry {
             .collect()
     }
 
+    /// The rows of grid points in the order their vertices are numbered: ring by ring, each
+    /// from its top row (largest z) down.
     pub(super) fn point_rows(&self) -> Vec<(usize, i64)> {
         self.rings
             .iter()
             .enumerate()
-            .flat_map(|(k, r)| (-r.b..=r.b).map(move |z| (k, z)))
+            .flat_map(|(k, r)| (-r.b..=r.b).rev().map(move |z| (k, z)))
             .collect()
     }
 }

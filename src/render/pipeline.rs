@@ -281,6 +281,10 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
                         BuildOptions::default().quality
                     },
                     compact: cfg.render.compact_bvh,
+                    grids: cfg
+                        .render
+                        .embree_geometry
+                        .grids_for(mesh.triangle_count(), camera_samples(cfg)),
                     ..BuildOptions::default()
                 };
                 let scene = Scene::new(&device, mesh, options)?;
@@ -572,3 +576,11 @@ use mount::prepare_mounted;
 #[cfg(test)]
 #[path = "pipeline_tests.rs"]
 mod tests;
+
+/// The camera samples a render of `cfg` traces (its pixels times its samples per pixel).
+#[cfg(feature = "embree")]
+fn camera_samples(cfg: &SceneConfig) -> u64 {
+    let c = &cfg.camera;
+    let camera = super::camera::Camera::new(c.aimed(), c.width, c.aspect);
+    (camera.width * camera.height) as u64 * u64::from(cfg.render.spp)
+}

@@ -110,6 +110,12 @@ pub struct BuildOptions {
     pub compact: bool,
     /// Watertight traversal: a ray through a shared edge hits exactly one triangle.
     pub robust: bool,
+    /// Hand a mesh's strips of whole cells ([`crate::mesh::Strip`]) to Embree as grids
+    /// (`RTC_GEOMETRY_TYPE_GRID`) and only its other triangles as triangles: the same
+    /// triangles, a BVH over a quarter as many primitives (paper-high's build 4.4x faster in
+    /// a quarter of the memory, docs/performance.md). Meshes without strips are triangles
+    /// whatever this says.
+    pub grids: bool,
 }
 
 impl Default for BuildOptions {
@@ -118,6 +124,7 @@ impl Default for BuildOptions {
             quality: Quality::Medium,
             compact: true,
             robust: true,
+            grids: true,
         }
     }
 }

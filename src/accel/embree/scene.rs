@@ -14,6 +14,8 @@ use crate::mesh::Mesh;
 pub struct Scene {
     raw: NonNull<c_void>,
     geometry: NonNull<c_void>,
+    /// Grids and triangles: the mesh's strips as one geometry, its other triangles as another.
+    split: Option<Split>,
     mesh: Arc<Mesh>,
     build_seconds: f64,
     options: BuildOptions,
@@ -23,6 +25,18 @@ pub struct Scene {
     /// What the device's memory monitor saw the build allocate (the BVH and Embree's own
     /// per-geometry data; the shared mesh buffers are not copied).
     bytes: u64,
+}
+
+/// A mesh handed to Embree as grids ([`BuildOptions::grids`]) and the triangles outside them.
+struct Split {
+    /// The grid geometry's id; `geometry` is its handle.
+    grids: u32,
+    /// The other triangles' geometry, if any: its handle, id, and each of its primitives'
+    /// triangle in the mesh (its index buffer, `rest_indices`, is theirs in that order).
+    rest: Option<(NonNull<c_void>, u32)>,
+    rest_prims: Vec<u32>,
+    /// Kept alive for Embree, which shares it.
+    _rest_indices: Vec<[u32; 3]>,
 }
 
 // SAFETY: a committed scene is only read (rtcIntersect*, rtcOccluded*, rtcInterpolate), which
@@ -85,30 +99,90 @@ impl Scene {
             mesh.uvs().as_ptr() as *const f32
         };
         let mut geom_id = 0u32;
-        // SAFETY: buffers are validated (indices in range), padded (checked above) and kept
-        // alive and unmodified by the Arc<Mesh> stored in the returned Scene.
-        let geometry = unsafe {
-            ffi::vo_scene_attach_triangles(
-                dev,
-                scene.as_ptr(),
-                options.quality.raw(),
-                mesh.positions().as_ptr() as *const f32,
-                mesh.vertex_count(),
-                mesh.indices().as_ptr() as *const u32,
-                mesh.triangle_count(),
-                uvs,
-                &mut geom_id,
-            )
-        };
-        device.check("rtcAttachGeometry").map_err(release)?;
-        let geometry = NonNull::new(geometry).ok_or_else(|| {
-            release(EmbreeError::Call {
-                call: "rtcNewGeometry",
-                code: 1,
-                name: error_name(1),
-                message: "no geometry returned".into(),
+        let returned = |g: *mut c_void| {
+            NonNull::new(g).ok_or_else(|| {
+                release(EmbreeError::Call {
+                    call: "rtcNewGeometry",
+                    code: 1,
+                    name: error_name(1),
+                    message: "no geometry returned".into(),
+                })
             })
-        })?;
+        };
+        let (geometry, split) = if options.grids && !mesh.strips().is_empty() {
+            let (rest_prims, rest_indices) = outside_strips(&mesh);
+            let rest = if rest_prims.is_empty() {
+                None
+            } else {
+                // SAFETY: as for the whole mesh below; `rest_indices` moves into the Scene
+                // with its heap buffer unchanged.
+                let g = unsafe {
+                    ffi::vo_scene_attach_triangles(
+                        dev,
+                        scene.as_ptr(),
+                        options.quality.raw(),
+                        mesh.positions().as_ptr() as *const f32,
+                        mesh.vertex_count(),
+                        rest_indices.as_ptr() as *const u32,
+                        rest_indices.len(),
+                        std::ptr::null(),
+                        &mut geom_id,
+                    )
+                };
+                device.check("rtcAttachGeometry").map_err(release)?;
+                Some((returned(g)?, geom_id))
+            };
+            let grids: Vec<ffi::vo_grid> = mesh
+                .strips()
+                .iter()
+                .map(|s| ffi::vo_grid {
+                    start: s.start,
+                    stride: s.stride,
+                    width: s.cells + 1,
+                    height: 2,
+                })
+                .collect();
+            // SAFETY: the strips were checked against the mesh (every vertex they name
+            // exists); positions as below; the grids are copied.
+            let g = unsafe {
+                ffi::vo_scene_attach_grids(
+                    dev,
+                    scene.as_ptr(),
+                    options.quality.raw(),
+                    mesh.positions().as_ptr() as *const f32,
+                    mesh.vertex_count(),
+                    grids.as_ptr(),
+                    grids.len(),
+                    &mut geom_id,
+                )
+            };
+            device.check("rtcAttachGeometry (grids)").map_err(release)?;
+            let split = Split {
+                grids: geom_id,
+                rest,
+                rest_prims,
+                _rest_indices: rest_indices,
+            };
+            (returned(g)?, Some(split))
+        } else {
+            // SAFETY: buffers are validated (indices in range), padded (checked above) and
+            // kept alive and unmodified by the Arc<Mesh> stored in the returned Scene.
+            let g = unsafe {
+                ffi::vo_scene_attach_triangles(
+                    dev,
+                    scene.as_ptr(),
+                    options.quality.raw(),
+                    mesh.positions().as_ptr() as *const f32,
+                    mesh.vertex_count(),
+                    mesh.indices().as_ptr() as *const u32,
+                    mesh.triangle_count(),
+                    uvs,
+                    &mut geom_id,
+                )
+            };
+            device.check("rtcAttachGeometry").map_err(release)?;
+            (returned(g)?, None)
+        };
         let before = device.memory().0;
         let start = Instant::now();
         // SAFETY: scene is live and complete.
@@ -119,6 +193,7 @@ impl Scene {
         Ok(Scene {
             raw: scene,
             geometry,
+            split,
             mesh,
             build_seconds,
             options,
@@ -173,7 +248,12 @@ impl Scene {
         let start = Instant::now();
         // SAFETY: the scene and geometry are live; the vertex buffer is the one attached (the
         // Vec was changed in place, never reallocated) and nothing traces while `&mut self`.
-        unsafe { ffi::vo_scene_refit(self.raw.as_ptr(), self.geometry.as_ptr()) };
+        let second = self
+            .split
+            .as_ref()
+            .and_then(|s| s.rest)
+            .map_or(std::ptr::null_mut(), |(g, _)| g.as_ptr());
+        unsafe { ffi::vo_scene_refit(self.raw.as_ptr(), self.geometry.as_ptr(), second) };
         let seconds = start.elapsed().as_secs_f64();
         self.device.check("rtcCommitScene (refit)")?;
         Ok(seconds)
@@ -216,13 +296,36 @@ impl Scene {
     }
 }
 
-fn to_hit(h: &ffi::vo_hit) -> Option<Hit> {
-    (h.prim != ffi::VO_INVALID_ID).then_some(Hit {
-        t: h.t,
-        prim: h.prim,
-        u: h.u,
-        v: h.v,
-    })
+impl Scene {
+    /// Embree's hit as the mesh's: a grid's hit becomes its cell's triangle and barycentrics,
+    /// a remaining triangle's its own.
+    #[inline]
+    fn to_hit(&self, h: &ffi::vo_hit) -> Option<Hit> {
+        if h.prim == ffi::VO_INVALID_ID {
+            return None;
+        }
+        let (prim, u, v) = match &self.split {
+            None => (h.prim, h.u, h.v),
+            Some(s) if h.geom == s.grids => self.mesh.strip_hit(h.prim, h.u, h.v),
+            Some(s) => (s.rest_prims[h.prim as usize], h.u, h.v),
+        };
+        Some(Hit { t: h.t, prim, u, v })
+    }
+}
+
+/// The triangles of `mesh` in none of its strips: their indices in the mesh, and their
+/// vertices.
+fn outside_strips(mesh: &Mesh) -> (Vec<u32>, Vec<[u32; 3]>) {
+    let mut covered = vec![false; mesh.triangle_count()];
+    for s in mesh.strips() {
+        let first = s.first_triangle as usize;
+        covered[first..first + 2 * usize::from(s.cells)].fill(true);
+    }
+    let prims: Vec<u32> = (0..mesh.triangle_count() as u32)
+        .filter(|&t| !covered[t as usize])
+        .collect();
+    let indices = prims.iter().map(|&t| mesh.indices()[t as usize]).collect();
+    (prims, indices)
 }
 
 impl Accel for Scene {
@@ -239,7 +342,7 @@ impl Accel for Scene {
                 &mut h,
             )
         };
-        to_hit(&h)
+        self.to_hit(&h)
     }
 
     fn intersect_many(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
@@ -270,7 +373,7 @@ impl Accel for Scene {
             };
             for (h, o) in hs.iter_mut().zip(&out[..rs.len()]) {
                 // SAFETY: written by the shim above.
-                *h = to_hit(unsafe { o.assume_init_ref() });
+                *h = self.to_hit(unsafe { o.assume_init_ref() });
             }
         }
     }

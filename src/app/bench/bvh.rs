@@ -194,8 +194,11 @@ fn embree_row(
     quality: Quality,
     speed: Option<&RaySets>,
 ) -> Result<(BvhRow, Scene), AppError> {
+    // (triangles: the benchmark measures Embree's triangle builds at each quality; a
+    // tessellation's grids are measured in docs/performance.md, "Grids")
     let options = BuildOptions {
         quality,
+        grids: false,
         ..BuildOptions::default()
     };
     let n = mesh.triangle_count();
