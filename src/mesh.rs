@@ -11,8 +11,8 @@
 
 use thiserror::Error;
 
-mod strips;
-pub use strips::{MAX_STRIP_CELLS, Strip};
+mod blocks;
+pub use blocks::{Block, MAX_BLOCK_CELLS};
 
 use crate::image_io::{WriteError, write_atomically};
 
@@ -36,8 +36,8 @@ pub enum MeshError {
     },
     #[error("mesh has {0} vertices; indices are u32, so at most 4294967295")]
     TooManyVertices(usize),
-    #[error("strip {0} does not match the mesh's triangles")]
-    BadStrip(usize),
+    #[error("block {0} does not match the mesh's triangles")]
+    BadBlock(usize),
 }
 
 /// An immutable, validated triangle mesh. Fields are private so the padding and validation
@@ -48,8 +48,10 @@ pub struct Mesh {
     normals: Vec<[f32; 3]>,
     uvs: Padded<[f32; 2]>,
     indices: Vec<[u32; 3]>,
-    /// Rows of whole cells that may be traced as grids ([`Strip`]; empty for most meshes).
-    strips: Vec<Strip>,
+    /// Blocks of whole cells that may be traced as grids ([`Block`]; empty for most meshes),
+    /// and the first triangle of each of their rows.
+    blocks: Vec<Block>,
+    block_rows: Vec<u32>,
 }
 
 /// A buffer whose allocation holds at least one initialised element past its length, so a
@@ -131,7 +133,8 @@ impl Mesh {
             normals,
             uvs: Padded::new(uvs),
             indices,
-            strips: Vec::new(),
+            blocks: Vec::new(),
+            block_rows: Vec::new(),
         })
     }
 
@@ -245,7 +248,8 @@ impl Mesh {
             + size_of_val(self.normals.as_slice())
             + size_of_val(&*self.uvs)
             + size_of_val(self.indices.as_slice())
-            + size_of_val(self.strips.as_slice())
+            + size_of_val(self.blocks.as_slice())
+            + size_of_val(self.block_rows.as_slice())
     }
 
     /// Whether the position and uv allocations extend past their last element (see module doc).

@@ -547,26 +547,27 @@ fn rays_straight_down_never_fall_through_the_displaced_mesh() {
     assert!(misses.is_empty(), "rays fell through at {misses:?}");
 }
 
-/// Every tessellation's whole cells come as strips ([`vastocean::mesh::Strip`], checked
-/// against the triangles when the mesh is made): no triangle is in two strips, and the strips
+/// Every tessellation's whole cells come in blocks ([`vastocean::mesh::Block`], checked
+/// against the triangles when the mesh is made): no triangle is in two blocks, and the blocks
 /// hold every triangle but those of the cells touching a coarser ring's hole.
 #[test]
-fn strips_hold_every_whole_cell_once() {
+fn blocks_hold_every_whole_cell_once() {
     let flat = Surface::flat();
     let sampler = flat.sampler([0.0, 0.0]);
     for (name, params) in configs() {
         let (mesh, _) = tessellate(&params, &sampler).unwrap();
         let mut seen = vec![false; mesh.triangle_count()];
-        for s in mesh.strips() {
-            let first = s.first_triangle as usize;
-            for (t, seen) in seen
-                .iter_mut()
-                .enumerate()
-                .skip(first)
-                .take(2 * usize::from(s.cells))
-            {
-                assert!(!*seen, "{name}: triangle {t} in two strips");
-                *seen = true;
+        for b in mesh.blocks() {
+            for &first in &mesh.block_rows()[b.first_row as usize..][..usize::from(b.rows)] {
+                for (t, seen) in seen
+                    .iter_mut()
+                    .enumerate()
+                    .skip(first as usize)
+                    .take(2 * usize::from(b.cells))
+                {
+                    assert!(!*seen, "{name}: triangle {t} in two blocks");
+                    *seen = true;
+                }
             }
         }
         let outside = seen.iter().filter(|&&b| !b).count();
@@ -579,13 +580,18 @@ fn strips_hold_every_whole_cell_once() {
             .sum();
         assert!(
             outside <= sides,
-            "{name}: {outside} triangles outside the strips, at most {sides} expected"
+            "{name}: {outside} triangles outside the blocks, at most {sides} expected"
         );
-        assert!(!mesh.strips().is_empty(), "{name}: no strips");
+        // rows stack into blocks: fewer blocks than cell rows with blocks in them
+        assert!(!mesh.blocks().is_empty(), "{name}: no blocks");
+        assert!(
+            mesh.blocks().iter().any(|b| b.rows > 1),
+            "{name}: no block of more than one row"
+        );
     }
 }
 
-/// Embree traces a tessellation's strips as grids: the same hits as its triangles give (the
+/// Embree traces a tessellation's blocks as grids: the same hits as its triangles give (the
 /// same triangle, t and barycentrics within f32 rounding), bar rays through an edge.
 #[cfg(feature = "embree")]
 #[test]

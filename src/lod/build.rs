@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use super::grid::{Geometry, Unit, V};
 use super::{LodError, LodParams, MAX_TRIANGLES, RingStats, displace_into};
-use crate::mesh::{MAX_STRIP_CELLS, Mesh, MeshError, Strip};
+use crate::mesh::{Block, MAX_BLOCK_CELLS, Mesh, MeshError};
 use crate::ocean::Sampler;
 
 /// Vertex numbering: per ring, a dense array over its (2b+1)^2 grid points (`u32::MAX` where
@@ -34,17 +34,19 @@ impl Geometry {
         let attrs = self.attributes(&vi, params.earth_radius_m, sampler);
         let (indices, tri_counts) = self.triangles(&vi.index)?;
         let per_ring = self.ring_stats(&tri_counts);
-        let strips = self.strips(&vi.index, &tri_counts);
+        let (blocks, block_rows) = self.blocks(&vi.index, &tri_counts);
         drop(vi);
-        let mesh =
-            Mesh::new(attrs.positions, attrs.normals, attrs.uvs, indices)?.with_strips(strips)?;
+        let mesh = Mesh::new(attrs.positions, attrs.normals, attrs.uvs, indices)?
+            .with_blocks(blocks, block_rows)?;
         Ok((mesh, per_ring))
     }
 
-    /// The runs of whole cells in each cell row ([`Strip`]): cells none of whose corners lies
-    /// on the hole of its ring (those are the finer ring's vertices), at most
-    /// [`MAX_STRIP_CELLS`] to a strip. `tri_counts` are the triangles of each cell row.
-    fn strips(&self, index: &[Vec<u32>], tri_counts: &[usize]) -> Vec<Strip> {
+    /// The blocks of whole cells ([`Block`]): cells none of whose corners lies on the hole of
+    /// its ring (those are the finer ring's vertices), in runs along each cell row, and runs of
+    /// the same cells and vertex stride in the rows below one another stacked into blocks, at
+    /// most [`MAX_BLOCK_CELLS`] each way. `tri_counts` are the triangles of each cell row.
+    /// Returns the blocks and their rows' first triangles.
+    fn blocks(&self, index: &[Vec<u32>], tri_counts: &[usize]) -> (Vec<Block>, Vec<u32>) {
         let cell_rows = self.cell_rows();
         let mut bases = Vec::with_capacity(tri_counts.len());
         let mut acc = 0usize;
@@ -52,7 +54,8 @@ impl Geometry {
             bases.push(acc as u32);
             acc += c;
         }
-        let rows: Vec<Vec<Strip>> = cell_rows
+        // Per cell row: (first vertex of the run's upper row, stride, cells, first triangle).
+        let runs: Vec<Vec<(u32, u32, u16, u32)>> = cell_rows
             .par_iter()
             .zip(&bases)
             .map(|(&(k, j), &base)| {
@@ -60,9 +63,9 @@ impl Geometry {
                 let side = 2 * r.b + 1;
                 let at = |x: i64, z: i64| index[k][((z + r.b) * side + x + r.b) as usize];
                 let own = |x: i64, z: i64| k == 0 || x.abs().max(z.abs()) != r.a;
-                let mut out: Vec<Strip> = Vec::new();
+                let mut out: Vec<(u32, u32, u16, u32)> = Vec::new();
                 let mut t = base;
-                // the strip being grown, and the cell that would extend it
+                // the cell that would extend the last run
                 let mut open: Option<i64> = None;
                 self.row_units(k, j, |u| {
                     let here = t;
@@ -80,27 +83,61 @@ impl Geometry {
                         open = None;
                         return;
                     }
-                    if let (Some(next), Some(s)) = (open, out.last_mut())
-                        && next == i
-                        && s.cells < MAX_STRIP_CELLS
-                        && up == s.start + u32::from(s.cells)
-                        && low - up == s.stride
-                    {
-                        s.cells += 1;
-                    } else {
-                        out.push(Strip {
-                            start: up,
-                            stride: low - up,
-                            cells: 1,
-                            first_triangle: here,
-                        });
+                    match (open, out.last_mut()) {
+                        (Some(next), Some(run))
+                            if next == i
+                                && run.2 < MAX_BLOCK_CELLS
+                                && up == run.0 + u32::from(run.2)
+                                && low - up == run.1 =>
+                        {
+                            run.2 += 1
+                        }
+                        _ => out.push((up, low - up, 1, here)),
                     }
                     open = Some(i + 1);
                 });
                 out
             })
             .collect();
-        rows.concat()
+        // Stack the runs from each ring's top cell row down: a run continues the block whose
+        // last row's lower vertices it starts on, with the same cells and stride.
+        let (mut built, mut firsts): (Vec<Block>, Vec<Vec<u32>>) = (Vec::new(), Vec::new());
+        let mut open: std::collections::HashMap<u32, usize> = Default::default();
+        for row in runs.iter().rev() {
+            let mut next = std::collections::HashMap::with_capacity(row.len());
+            for &(start, stride, cells, first) in row {
+                let b = match open.get(&start) {
+                    Some(&b)
+                        if built[b].stride == stride
+                            && built[b].cells == cells
+                            && built[b].rows < MAX_BLOCK_CELLS =>
+                    {
+                        built[b].rows += 1;
+                        firsts[b].push(first);
+                        b
+                    }
+                    _ => {
+                        built.push(Block {
+                            start,
+                            stride,
+                            cells,
+                            rows: 1,
+                            first_row: 0,
+                        });
+                        firsts.push(vec![first]);
+                        built.len() - 1
+                    }
+                };
+                next.insert(start + stride, b);
+            }
+            open = next;
+        }
+        let mut table = Vec::with_capacity(firsts.iter().map(Vec::len).sum());
+        for (b, rows) in built.iter_mut().zip(&firsts) {
+            b.first_row = table.len() as u32;
+            table.extend_from_slice(rows);
+        }
+        (built, table)
     }
 
     /// Numbers the used grid points in (ring, row) order, rows counted in parallel.

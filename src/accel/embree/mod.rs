@@ -110,11 +110,10 @@ pub struct BuildOptions {
     pub compact: bool,
     /// Watertight traversal: a ray through a shared edge hits exactly one triangle.
     pub robust: bool,
-    /// Hand a mesh's strips of whole cells ([`crate::mesh::Strip`]) to Embree as grids
+    /// Hand a mesh's blocks of whole cells ([`crate::mesh::Block`]) to Embree as grids
     /// (`RTC_GEOMETRY_TYPE_GRID`) and only its other triangles as triangles: the same
-    /// triangles, a BVH over a quarter as many primitives (paper-high's build 4.4x faster in
-    /// a quarter of the memory, docs/performance.md). Meshes without strips are triangles
-    /// whatever this says.
+    /// triangles, a BVH over far fewer primitives (docs/performance.md, "Grids"). Meshes
+    /// without blocks are triangles whatever this says.
     pub grids: bool,
 }
 

@@ -14,7 +14,7 @@ use crate::mesh::Mesh;
 pub struct Scene {
     raw: NonNull<c_void>,
     geometry: NonNull<c_void>,
-    /// Grids and triangles: the mesh's strips as one geometry, its other triangles as another.
+    /// Grids and triangles: the mesh's blocks as one geometry, its other triangles as another.
     split: Option<Split>,
     mesh: Arc<Mesh>,
     build_seconds: f64,
@@ -109,8 +109,8 @@ impl Scene {
                 })
             })
         };
-        let (geometry, split) = if options.grids && !mesh.strips().is_empty() {
-            let (rest_prims, rest_indices) = outside_strips(&mesh);
+        let (geometry, split) = if options.grids && !mesh.blocks().is_empty() {
+            let (rest_prims, rest_indices) = outside_blocks(&mesh);
             let rest = if rest_prims.is_empty() {
                 None
             } else {
@@ -133,16 +133,16 @@ impl Scene {
                 Some((returned(g)?, geom_id))
             };
             let grids: Vec<ffi::vo_grid> = mesh
-                .strips()
+                .blocks()
                 .iter()
-                .map(|s| ffi::vo_grid {
-                    start: s.start,
-                    stride: s.stride,
-                    width: s.cells + 1,
-                    height: 2,
+                .map(|b| ffi::vo_grid {
+                    start: b.start,
+                    stride: b.stride,
+                    width: b.cells + 1,
+                    height: b.rows + 1,
                 })
                 .collect();
-            // SAFETY: the strips were checked against the mesh (every vertex they name
+            // SAFETY: the blocks were checked against the mesh (every vertex they name
             // exists); positions as below; the grids are copied.
             let g = unsafe {
                 ffi::vo_scene_attach_grids(
@@ -306,20 +306,23 @@ impl Scene {
         }
         let (prim, u, v) = match &self.split {
             None => (h.prim, h.u, h.v),
-            Some(s) if h.geom == s.grids => self.mesh.strip_hit(h.prim, h.u, h.v),
+            Some(s) if h.geom == s.grids => self.mesh.block_hit(h.prim, h.u, h.v),
             Some(s) => (s.rest_prims[h.prim as usize], h.u, h.v),
         };
         Some(Hit { t: h.t, prim, u, v })
     }
 }
 
-/// The triangles of `mesh` in none of its strips: their indices in the mesh, and their
+/// The triangles of `mesh` in none of its blocks: their indices in the mesh, and their
 /// vertices.
-fn outside_strips(mesh: &Mesh) -> (Vec<u32>, Vec<[u32; 3]>) {
+fn outside_blocks(mesh: &Mesh) -> (Vec<u32>, Vec<[u32; 3]>) {
     let mut covered = vec![false; mesh.triangle_count()];
-    for s in mesh.strips() {
-        let first = s.first_triangle as usize;
-        covered[first..first + 2 * usize::from(s.cells)].fill(true);
+    for b in mesh.blocks() {
+        let rows = &mesh.block_rows()[b.first_row as usize..][..usize::from(b.rows)];
+        for &first in rows {
+            let first = first as usize;
+            covered[first..first + 2 * usize::from(b.cells)].fill(true);
+        }
     }
     let prims: Vec<u32> = (0..mesh.triangle_count() as u32)
         .filter(|&t| !covered[t as usize])
