@@ -1,5 +1,6 @@
 //! `vastocean bench bvh`: BVH build time against triangle count for Embree (low, medium and
-//! high quality, and a refit of moved vertices) and the Rust BVH, on ocean meshes from the
+//! high quality, a refit of moved vertices, and medium with the blocks of whole cells as grids,
+//! `medium-grids`) and the Rust BVH, on ocean meshes from the
 //! project's own tessellation (the paper's doubling rule, log-spaced sizes up to paper-high's
 //! 22.3 M triangles); the median of repeated builds, triangles per second, the memory of the
 //! built structure, and trace speed (camera rays of a panorama and the secondary rays its hits
@@ -65,7 +66,8 @@ impl BvhBenchJob {
 pub struct BvhRow {
     /// "embree" or "rust".
     pub backend: &'static str,
-    /// Embree's build quality ("low", "medium", "high", "refit"); "sah" for the Rust BVH.
+    /// Embree's build quality ("low", "medium", "high", "refit", or "medium-grids" for the
+    /// mesh's blocks as grids); "sah" for the Rust BVH.
     pub quality: String,
     pub triangles: usize,
     /// Median wall-clock seconds of `builds` builds (for refit: of refits of moved vertices).
@@ -187,18 +189,18 @@ fn mrays_per_s(accel: &dyn Accel, rays: &[Ray]) -> f64 {
     rays.len() as f64 / best.max(1e-12) / 1e6
 }
 
-/// Embree at one quality on one mesh.
+/// Embree at one quality on one mesh, its cells as triangles or (`grids`) its blocks of whole
+/// cells as grids.
 fn embree_row(
     device: &Arc<Device>,
     mesh: &Arc<Mesh>,
     quality: Quality,
+    grids: bool,
     speed: Option<&RaySets>,
 ) -> Result<(BvhRow, Scene), AppError> {
-    // (triangles: the benchmark measures Embree's triangle builds at each quality; a
-    // tessellation's grids are measured in docs/performance.md, "Grids")
     let options = BuildOptions {
         quality,
-        grids: false,
+        grids,
         ..BuildOptions::default()
     };
     let n = mesh.triangle_count();
@@ -230,7 +232,11 @@ fn embree_row(
     let (camera, secondary, random) = speed.map_or((0.0, 0.0, 0.0), |r| r.speeds(&scene));
     let row = BvhRow {
         backend: "embree",
-        quality: quality.to_string(),
+        quality: if grids {
+            format!("{quality}-grids")
+        } else {
+            quality.to_string()
+        },
         triangles: n,
         seconds,
         builds: repeats(n),
@@ -283,7 +289,7 @@ pub fn run(job: &BvhBenchJob) -> Result<BvhBenchReport, AppError> {
             "mesh sizes must be between 1 and 1e9 triangles (got {sizes:?})"
         )));
     }
-    let progress = Progress::new(job.progress, sizes.len() as u64 * 5, "bench bvh");
+    let progress = Progress::new(job.progress, sizes.len() as u64 * 6, "bench bvh");
     let rows = pool.install(|| -> Result<Vec<BvhRow>, AppError> {
         let ocean = Surface::new(&OceanParams::default(), 1)?;
         let device = Device::new(threads)?;
@@ -292,7 +298,7 @@ pub fn run(job: &BvhBenchJob) -> Result<BvhBenchReport, AppError> {
             let mesh = Arc::new(ocean_mesh(&ocean, target)?);
             let n = mesh.triangle_count();
             // Rays from the medium-quality scene, traced through every backend.
-            let (medium, scene) = embree_row(&device, &mesh, Quality::Medium, None)?;
+            let (medium, scene) = embree_row(&device, &mesh, Quality::Medium, false, None)?;
             let rays = test_rays(&scene);
             let (camera, secondary, random) = rays.speeds(&scene);
             let medium = BvhRow {
@@ -304,10 +310,13 @@ pub fn run(job: &BvhBenchJob) -> Result<BvhBenchReport, AppError> {
             drop(scene);
             progress.step(format!("{n} triangles: embree medium"));
             for quality in [Quality::Low, Quality::High, Quality::Refit] {
-                let (row, _) = embree_row(&device, &mesh, quality, Some(&rays))?;
+                let (row, _) = embree_row(&device, &mesh, quality, false, Some(&rays))?;
                 rows.push(row);
                 progress.step(format!("{n} triangles: embree {quality}"));
             }
+            let (row, _) = embree_row(&device, &mesh, Quality::Medium, true, Some(&rays))?;
+            rows.push(row);
+            progress.step(format!("{n} triangles: embree medium, grids"));
             rows.push(medium);
             rows.push(rust_row(&mesh, &rays));
             progress.step(format!("{n} triangles: rust"));
