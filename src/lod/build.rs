@@ -32,112 +32,13 @@ impl Geometry {
     ) -> Result<(Mesh, Vec<RingStats>), LodError> {
         let vi = self.vertex_index()?;
         let attrs = self.attributes(&vi, params.earth_radius_m, sampler);
-        let (indices, tri_counts) = self.triangles(&vi.index)?;
+        let (indices, tri_counts, runs) = self.triangles(&vi.index)?;
         let per_ring = self.ring_stats(&tri_counts);
-        let (blocks, block_rows) = self.blocks(&vi.index, &tri_counts);
+        let (blocks, block_rows) = blocks(&runs);
         drop(vi);
         let mesh = Mesh::new(attrs.positions, attrs.normals, attrs.uvs, indices)?
             .with_blocks(blocks, block_rows)?;
         Ok((mesh, per_ring))
-    }
-
-    /// The blocks of whole cells ([`Block`]): cells none of whose corners lies on the hole of
-    /// its ring (those are the finer ring's vertices), in runs along each cell row, and runs of
-    /// the same cells and vertex stride in the rows below one another stacked into blocks, at
-    /// most [`MAX_BLOCK_CELLS`] each way. `tri_counts` are the triangles of each cell row.
-    /// Returns the blocks and their rows' first triangles.
-    fn blocks(&self, index: &[Vec<u32>], tri_counts: &[usize]) -> (Vec<Block>, Vec<u32>) {
-        let cell_rows = self.cell_rows();
-        let mut bases = Vec::with_capacity(tri_counts.len());
-        let mut acc = 0usize;
-        for &c in tri_counts {
-            bases.push(acc as u32);
-            acc += c;
-        }
-        // Per cell row: (first vertex of the run's upper row, stride, cells, first triangle).
-        let runs: Vec<Vec<(u32, u32, u16, u32)>> = cell_rows
-            .par_iter()
-            .zip(&bases)
-            .map(|(&(k, j), &base)| {
-                let r = &self.rings[k];
-                let side = 2 * r.b + 1;
-                let at = |x: i64, z: i64| index[k][((z + r.b) * side + x + r.b) as usize];
-                let own = |x: i64, z: i64| k == 0 || x.abs().max(z.abs()) != r.a;
-                let mut out: Vec<(u32, u32, u16, u32)> = Vec::new();
-                let mut t = base;
-                // the cell that would extend the last run
-                let mut open: Option<i64> = None;
-                self.row_units(k, j, |u| {
-                    let here = t;
-                    t += Self::unit_tri_count(u) as u32;
-                    let Unit::Cell((i, _)) = u else {
-                        open = None;
-                        return;
-                    };
-                    let whole = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)]
-                        .iter()
-                        .all(|&(x, z)| own(x, z));
-                    let (up, low) = (at(i, j + 1), at(i, j));
-                    if !whole || at(i + 1, j + 1) != up + 1 || at(i + 1, j) != low + 1 || low <= up
-                    {
-                        open = None;
-                        return;
-                    }
-                    match (open, out.last_mut()) {
-                        (Some(next), Some(run))
-                            if next == i
-                                && run.2 < MAX_BLOCK_CELLS
-                                && up == run.0 + u32::from(run.2)
-                                && low - up == run.1 =>
-                        {
-                            run.2 += 1
-                        }
-                        _ => out.push((up, low - up, 1, here)),
-                    }
-                    open = Some(i + 1);
-                });
-                out
-            })
-            .collect();
-        // Stack the runs from each ring's top cell row down: a run continues the block whose
-        // last row's lower vertices it starts on, with the same cells and stride.
-        let (mut built, mut firsts): (Vec<Block>, Vec<Vec<u32>>) = (Vec::new(), Vec::new());
-        let mut open: std::collections::HashMap<u32, usize> = Default::default();
-        for row in runs.iter().rev() {
-            let mut next = std::collections::HashMap::with_capacity(row.len());
-            for &(start, stride, cells, first) in row {
-                let b = match open.get(&start) {
-                    Some(&b)
-                        if built[b].stride == stride
-                            && built[b].cells == cells
-                            && built[b].rows < MAX_BLOCK_CELLS =>
-                    {
-                        built[b].rows += 1;
-                        firsts[b].push(first);
-                        b
-                    }
-                    _ => {
-                        built.push(Block {
-                            start,
-                            stride,
-                            cells,
-                            rows: 1,
-                            first_row: 0,
-                        });
-                        firsts.push(vec![first]);
-                        built.len() - 1
-                    }
-                };
-                next.insert(start + stride, b);
-            }
-            open = next;
-        }
-        let mut table = Vec::with_capacity(firsts.iter().map(Vec::len).sum());
-        for (b, rows) in built.iter_mut().zip(&firsts) {
-            b.first_row = table.len() as u32;
-            table.extend_from_slice(rows);
-        }
-        (built, table)
     }
 
     /// Numbers the used grid points in (ring, row) order, rows counted in parallel.
@@ -240,8 +141,15 @@ impl Geometry {
         }
     }
 
-    /// The triangles of every kept cell, row by row, and how many each cell row made.
-    fn triangles(&self, index: &[Vec<u32>]) -> Result<(Vec<[u32; 3]>, Vec<usize>), LodError> {
+    /// The triangles of every kept cell, row by row, how many each cell row made, and each
+    /// cell row's runs of whole cells (cells none of whose corners lies on the hole of its
+    /// ring, whose two triangles have the layout of [`Block`]), at most [`MAX_BLOCK_CELLS`]
+    /// to a run.
+    #[allow(clippy::type_complexity)]
+    fn triangles(
+        &self,
+        index: &[Vec<u32>],
+    ) -> Result<(Vec<[u32; 3]>, Vec<usize>, Vec<Vec<Run>>), LodError> {
         let cell_rows = self.cell_rows();
         let tri_counts: Vec<usize> = cell_rows
             .par_iter()
@@ -274,19 +182,62 @@ impl Geometry {
             debug_assert!(v != u32::MAX, "ring {k} point ({x}, {z}) has no vertex");
             v
         };
-        cell_rows
+        let mut bases = Vec::with_capacity(tri_counts.len());
+        let mut acc = 0u32;
+        for &c in &tri_counts {
+            bases.push(acc);
+            acc += c as u32;
+        }
+        let runs = cell_rows
             .par_iter()
             .zip(split_by(&mut indices, &tri_counts))
-            .for_each(|(&(k, j), out)| {
+            .zip(&bases)
+            .map(|((&(k, j), out), &base)| {
+                let a = self.rings[k].a;
+                let own = |x: i64, z: i64| k == 0 || x.abs().max(z.abs()) != a;
+                let mut runs: Vec<Run> = Vec::new();
+                // the cell that would extend the last run
+                let mut open: Option<i64> = None;
                 let mut n = 0;
                 self.row_units(k, j, |u| {
+                    let here = n;
                     self.unit_tris(k, u, |t| {
                         out[n] = t.map(lookup);
                         n += 1;
-                    })
+                    });
+                    let Unit::Cell((i, _)) = u else {
+                        open = None;
+                        return;
+                    };
+                    let whole = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)]
+                        .iter()
+                        .all(|&(x, z)| own(x, z));
+                    // the layout of `Block`: [low, up + 1, low + 1] and [low, up, up + 1]
+                    let (up, low) = (out[here + 1][1], out[here][0]);
+                    let laid = out[here] == [low, up + 1, low + 1]
+                        && out[here + 1] == [low, up, up + 1]
+                        && low > up;
+                    if !whole || !laid {
+                        open = None;
+                        return;
+                    }
+                    match (open, runs.last_mut()) {
+                        (Some(next), Some(run))
+                            if next == i
+                                && run.2 < MAX_BLOCK_CELLS
+                                && up == run.0 + u32::from(run.2)
+                                && low - up == run.1 =>
+                        {
+                            run.2 += 1
+                        }
+                        _ => runs.push((up, low - up, 1, base + here as u32)),
+                    }
+                    open = Some(i + 1);
                 });
-            });
-        Ok((indices, tri_counts))
+                runs
+            })
+            .collect();
+        Ok((indices, tri_counts, runs))
     }
 
     /// Size, extent and triangle count of each ring, from the per-cell-row counts.
@@ -317,4 +268,54 @@ fn split_by<'a, T>(mut s: &'a mut [T], counts: &[usize]) -> Vec<&'a mut [T]> {
         s = tail;
     }
     out
+}
+
+/// A run of whole cells along a cell row: the first vertex of its upper row, the vertex stride
+/// to the row below, its cells and the first cell's first triangle.
+type Run = (u32, u32, u16, u32);
+
+/// The blocks of whole cells ([`Block`]) from the runs of each cell row (in the order of
+/// `cell_rows`): runs of the same cells and vertex stride in the rows below one another stack
+/// into blocks, at most [`MAX_BLOCK_CELLS`] rows each. Returns the blocks and their rows' first
+/// triangles.
+fn blocks(runs: &[Vec<Run>]) -> (Vec<Block>, Vec<u32>) {
+    // Stack the runs from each ring's top cell row down: a run continues the block whose
+    // last row's lower vertices it starts on, with the same cells and stride.
+    let (mut built, mut firsts): (Vec<Block>, Vec<Vec<u32>>) = (Vec::new(), Vec::new());
+    let mut open: std::collections::HashMap<u32, usize> = Default::default();
+    for row in runs.iter().rev() {
+        let mut next = std::collections::HashMap::with_capacity(row.len());
+        for &(start, stride, cells, first) in row {
+            let b = match open.get(&start) {
+                Some(&b)
+                    if built[b].stride == stride
+                        && built[b].cells == cells
+                        && built[b].rows < MAX_BLOCK_CELLS =>
+                {
+                    built[b].rows += 1;
+                    firsts[b].push(first);
+                    b
+                }
+                _ => {
+                    built.push(Block {
+                        start,
+                        stride,
+                        cells,
+                        rows: 1,
+                        first_row: 0,
+                    });
+                    firsts.push(vec![first]);
+                    built.len() - 1
+                }
+            };
+            next.insert(start + stride, b);
+        }
+        open = next;
+    }
+    let mut table = Vec::with_capacity(firsts.iter().map(Vec::len).sum());
+    for (b, rows) in built.iter_mut().zip(&firsts) {
+        b.first_row = table.len() as u32;
+        table.extend_from_slice(rows);
+    }
+    (built, table)
 }

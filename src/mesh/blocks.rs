@@ -50,9 +50,10 @@ impl Mesh {
     /// The mesh, with `blocks` saying which of its triangles form grids and `rows` the first
     /// triangle of each block row (checked against the layout of [`Block`]).
     pub fn with_blocks(mut self, blocks: Vec<Block>, rows: Vec<u32>) -> Result<Mesh, MeshError> {
+        use rayon::prelude::*;
         let (tris, verts) = (self.indices.len() as u64, self.positions.len() as u64);
-        for (i, b) in blocks.iter().enumerate() {
-            let bad = || MeshError::BadBlock(i);
+        let indices = &self.indices;
+        let fits = |b: &Block| {
             let (cells, nrows) = (u64::from(b.cells), u64::from(b.rows));
             if !(1..=MAX_BLOCK_CELLS).contains(&b.cells)
                 || !(1..=MAX_BLOCK_CELLS).contains(&b.rows)
@@ -60,20 +61,20 @@ impl Mesh {
                 || u64::from(b.first_row) + nrows > rows.len() as u64
                 || u64::from(b.start) + u64::from(b.stride) * nrows + cells >= verts
             {
-                return Err(bad());
+                return false;
             }
-            for r in 0..u32::from(b.rows) {
+            (0..u32::from(b.rows)).all(|r| {
                 let first = u64::from(rows[(b.first_row + r) as usize]);
-                if first + 2 * cells > tris {
-                    return Err(bad());
-                }
-                for q in 0..u32::from(b.cells) {
-                    let t = (first + 2 * u64::from(q)) as usize;
-                    if self.indices[t..t + 2] != b.triangles(r, q) {
-                        return Err(bad());
-                    }
-                }
-            }
+                first + 2 * cells <= tris
+                    && (0..u32::from(b.cells)).all(|q| {
+                        let t = (first + 2 * u64::from(q)) as usize;
+                        indices[t..t + 2] == b.triangles(r, q)
+                    })
+            })
+        };
+        // (a paper-high mesh's 22 M triangles, read once, on every core)
+        if let Some(i) = blocks.par_iter().position_first(|b| !fits(b)) {
+            return Err(MeshError::BadBlock(i));
         }
         self.blocks = blocks;
         self.block_rows = rows;
