@@ -12,6 +12,7 @@
 
 mod describe;
 mod device;
+mod grids;
 mod instances;
 mod scene;
 mod user;

@@ -6,6 +6,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
+use super::grids::{self, Split};
 use super::{BuildOptions, Device, EmbreeError, error_name, ffi};
 use crate::accel::{Accel, Hit, Ray};
 use crate::mesh::Mesh;
@@ -25,18 +26,6 @@ pub struct Scene {
     /// What the device's memory monitor saw the build allocate (the BVH and Embree's own
     /// per-geometry data; the shared mesh buffers are not copied).
     bytes: u64,
-}
-
-/// A mesh handed to Embree as grids ([`BuildOptions::grids`]) and the triangles outside them.
-struct Split {
-    /// The grid geometry's id; `geometry` is its handle.
-    grids: u32,
-    /// The other triangles' geometry, if any: its handle, id, and each of its primitives'
-    /// triangle in the mesh (its index buffer, `rest_indices`, is theirs in that order).
-    rest: Option<(NonNull<c_void>, u32)>,
-    rest_prims: Vec<u32>,
-    /// Kept alive for Embree, which shares it.
-    _rest_indices: Vec<[u32; 3]>,
 }
 
 // SAFETY: a committed scene is only read (rtcIntersect*, rtcOccluded*, rtcInterpolate), which
@@ -62,6 +51,49 @@ pub(super) fn new_scene(
     })
 }
 
+/// Attaches the triangles `indices` over `mesh`'s vertices (and their texture coordinates
+/// `uvs`, or null) to `scene` and returns the geometry and its id.
+///
+/// # Safety
+/// `indices` must name vertices of `mesh`, whose positions are padded, and both (and `uvs`)
+/// must outlive the scene unchanged.
+pub(super) unsafe fn attach_triangles(
+    device: &Device,
+    scene: NonNull<c_void>,
+    options: BuildOptions,
+    mesh: &Mesh,
+    indices: &[[u32; 3]],
+    uvs: *const f32,
+) -> Result<(NonNull<c_void>, u32), EmbreeError> {
+    let mut geom_id = 0u32;
+    // SAFETY: the caller's.
+    let g = unsafe {
+        ffi::vo_scene_attach_triangles(
+            device.raw.as_ptr(),
+            scene.as_ptr(),
+            options.quality.raw(),
+            mesh.positions().as_ptr() as *const f32,
+            mesh.vertex_count(),
+            indices.as_ptr() as *const u32,
+            indices.len(),
+            uvs,
+            &mut geom_id,
+        )
+    };
+    device.check("rtcAttachGeometry")?;
+    Ok((returned(g)?, geom_id))
+}
+
+/// A geometry handle Embree returned, or the error of its absence.
+pub(super) fn returned(g: *mut c_void) -> Result<NonNull<c_void>, EmbreeError> {
+    NonNull::new(g).ok_or_else(|| EmbreeError::Call {
+        call: "rtcNewGeometry",
+        code: 1,
+        name: error_name(1),
+        message: "no geometry returned".into(),
+    })
+}
+
 impl Scene {
     /// Attaches `mesh`, builds the BVH and returns the committed scene.
     pub fn new(
@@ -75,7 +107,6 @@ impl Scene {
         if mesh.triangle_count() >= u32::MAX as usize {
             return Err(EmbreeError::TooLarge(mesh.triangle_count()));
         }
-        let dev = device.raw.as_ptr();
         // Held from attach to commit: errors drained below are this build's.
         let _building = device.building.lock().unwrap_or_else(|e| e.into_inner());
         let flags = if options.compact {
@@ -98,91 +129,16 @@ impl Scene {
         } else {
             mesh.uvs().as_ptr() as *const f32
         };
-        let mut geom_id = 0u32;
-        let returned = |g: *mut c_void| {
-            NonNull::new(g).ok_or_else(|| {
-                release(EmbreeError::Call {
-                    call: "rtcNewGeometry",
-                    code: 1,
-                    name: error_name(1),
-                    message: "no geometry returned".into(),
-                })
-            })
-        };
-        let (geometry, split) = if options.grids && !mesh.blocks().is_empty() {
-            let (rest_prims, rest_indices) = outside_blocks(&mesh);
-            let rest = if rest_prims.is_empty() {
-                None
-            } else {
-                // SAFETY: as for the whole mesh below; `rest_indices` moves into the Scene
-                // with its heap buffer unchanged.
-                let g = unsafe {
-                    ffi::vo_scene_attach_triangles(
-                        dev,
-                        scene.as_ptr(),
-                        options.quality.raw(),
-                        mesh.positions().as_ptr() as *const f32,
-                        mesh.vertex_count(),
-                        rest_indices.as_ptr() as *const u32,
-                        rest_indices.len(),
-                        std::ptr::null(),
-                        &mut geom_id,
-                    )
-                };
-                device.check("rtcAttachGeometry").map_err(release)?;
-                Some((returned(g)?, geom_id))
-            };
-            let grids: Vec<ffi::vo_grid> = mesh
-                .blocks()
-                .iter()
-                .map(|b| ffi::vo_grid {
-                    start: b.start,
-                    stride: b.stride,
-                    width: b.cells + 1,
-                    height: b.rows + 1,
-                })
-                .collect();
-            // SAFETY: the blocks were checked against the mesh (every vertex they name
-            // exists); positions as below; the grids are copied.
-            let g = unsafe {
-                ffi::vo_scene_attach_grids(
-                    dev,
-                    scene.as_ptr(),
-                    options.quality.raw(),
-                    mesh.positions().as_ptr() as *const f32,
-                    mesh.vertex_count(),
-                    grids.as_ptr(),
-                    grids.len(),
-                    &mut geom_id,
-                )
-            };
-            device.check("rtcAttachGeometry (grids)").map_err(release)?;
-            let split = Split {
-                grids: geom_id,
-                rest,
-                rest_prims,
-                _rest_indices: rest_indices,
-            };
-            (returned(g)?, Some(split))
+        let attached = if options.grids && !mesh.blocks().is_empty() {
+            grids::attach(device, scene, options, &mesh)
         } else {
-            // SAFETY: buffers are validated (indices in range), padded (checked above) and
-            // kept alive and unmodified by the Arc<Mesh> stored in the returned Scene.
-            let g = unsafe {
-                ffi::vo_scene_attach_triangles(
-                    dev,
-                    scene.as_ptr(),
-                    options.quality.raw(),
-                    mesh.positions().as_ptr() as *const f32,
-                    mesh.vertex_count(),
-                    mesh.indices().as_ptr() as *const u32,
-                    mesh.triangle_count(),
-                    uvs,
-                    &mut geom_id,
-                )
-            };
-            device.check("rtcAttachGeometry").map_err(release)?;
-            (returned(g)?, None)
+            // SAFETY: the mesh's index buffer is validated (in range), its positions and uvs
+            // padded (checked above), all kept alive and unmodified by the Arc<Mesh> stored in
+            // the returned Scene.
+            unsafe { attach_triangles(device, scene, options, &mesh, mesh.indices(), uvs) }
+                .map(|(g, _)| (g, None))
         };
+        let (geometry, split) = attached.map_err(release)?;
         let before = device.memory().0;
         let start = Instant::now();
         // SAFETY: scene is live and complete.
@@ -306,29 +262,10 @@ impl Scene {
         }
         let (prim, u, v) = match &self.split {
             None => (h.prim, h.u, h.v),
-            Some(s) if h.geom == s.grids => self.mesh.block_hit(h.prim, h.u, h.v),
-            Some(s) => (s.rest_prims[h.prim as usize], h.u, h.v),
+            Some(s) => s.hit(&self.mesh, h.geom, h.prim, h.u, h.v),
         };
         Some(Hit { t: h.t, prim, u, v })
     }
-}
-
-/// The triangles of `mesh` in none of its blocks: their indices in the mesh, and their
-/// vertices.
-fn outside_blocks(mesh: &Mesh) -> (Vec<u32>, Vec<[u32; 3]>) {
-    let mut covered = vec![false; mesh.triangle_count()];
-    for b in mesh.blocks() {
-        let rows = &mesh.block_rows()[b.first_row as usize..][..usize::from(b.rows)];
-        for &first in rows {
-            let first = first as usize;
-            covered[first..first + 2 * usize::from(b.cells)].fill(true);
-        }
-    }
-    let prims: Vec<u32> = (0..mesh.triangle_count() as u32)
-        .filter(|&t| !covered[t as usize])
-        .collect();
-    let indices = prims.iter().map(|&t| mesh.indices()[t as usize]).collect();
-    (prims, indices)
 }
 
 impl Accel for Scene {
