@@ -364,8 +364,14 @@ fn bench_bvh_writes_a_row_per_backend_quality_and_size() {
         ..app::bench::bvh::BvhBenchJob::quick(dir.clone(), 2)
     };
     let r = app::bench::bvh::run(&job).unwrap();
-    // Embree low, medium, high, refit and the Rust BVH, at each size.
-    assert_eq!(r.rows.len(), 10);
+    // Embree low, medium, high, refit, medium with grids and the Rust BVH, at each size.
+    assert_eq!(r.rows.len(), 12);
+    let grids: Vec<_> = r
+        .rows
+        .iter()
+        .filter(|row| row.quality == "medium-grids")
+        .collect();
+    assert_eq!(grids.len(), 2, "a grids row at each size");
     assert!(
         r.rows
             .iter()
@@ -377,7 +383,7 @@ fn bench_bvh_writes_a_row_per_backend_quality_and_size() {
             .all(|row| row.camera_mrays_per_s > 0.0 && row.random_mrays_per_s > 0.0)
     );
     let csv = std::fs::read_to_string(dir.join("bvh.csv")).unwrap();
-    assert_eq!(csv.lines().count(), 11);
+    assert_eq!(csv.lines().count(), 13);
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     for key in [
