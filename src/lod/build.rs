@@ -193,31 +193,50 @@ impl Geometry {
             .zip(split_by(&mut indices, &tri_counts))
             .zip(&bases)
             .map(|((&(k, j), out), &base)| {
-                let a = self.rings[k].a;
+                let (a, b) = (self.rings[k].a, self.rings[k].b);
                 let own = |x: i64, z: i64| k == 0 || x.abs().max(z.abs()) != a;
+                // the ring's own vertices in the cell row's lower and upper point rows
+                let side = (2 * b + 1) as usize;
+                let lower = &index[k][(j + b) as usize * side..][..side];
+                let upper = &index[k][(j + 1 + b) as usize * side..][..side];
                 let mut runs: Vec<Run> = Vec::new();
                 // the cell that would extend the last run
                 let mut open: Option<i64> = None;
                 let mut n = 0;
                 self.row_units(k, j, |u| {
                     let here = n;
-                    self.unit_tris(k, u, |t| {
-                        out[n] = t.map(lookup);
-                        n += 1;
-                    });
-                    let Unit::Cell((i, _)) = u else {
+                    let whole = match u {
+                        Unit::Cell((i, _))
+                            if [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)]
+                                .iter()
+                                .all(|&(x, z)| own(x, z)) =>
+                        {
+                            Some(i)
+                        }
+                        _ => None,
+                    };
+                    let Some(i) = whole else {
+                        self.unit_tris(k, u, |t| {
+                            out[n] = t.map(lookup);
+                            n += 1;
+                        });
                         open = None;
                         return;
                     };
-                    let whole = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)]
-                        .iter()
-                        .all(|&(x, z)| own(x, z));
+                    // What `unit_tris` and `lookup` give a cell whose corners are all its ring's
+                    // (both triangles counter-clockwise as they stand), read straight from the
+                    // two point rows: a fifth of the time.
+                    let x = (i + b) as usize;
+                    let (l0, l1, u0, u1) = (lower[x], lower[x + 1], upper[x], upper[x + 1]);
+                    out[n] = [l0, u1, l1];
+                    out[n + 1] = [l0, u0, u1];
+                    n += 2;
                     // the layout of `Block`: [low, up + 1, low + 1] and [low, up, up + 1]
                     let (up, low) = (out[here + 1][1], out[here][0]);
                     let laid = out[here] == [low, up + 1, low + 1]
                         && out[here + 1] == [low, up, up + 1]
                         && low > up;
-                    if !whole || !laid {
+                    if !laid {
                         open = None;
                         return;
                     }
