@@ -6,7 +6,7 @@ use thiserror::Error;
 use super::Camera;
 #[cfg(feature = "embree")]
 use crate::accel::embree::EmbreeError;
-use crate::config::{ConfigError, SceneConfig};
+use crate::config::{Backend, ConfigError, SceneConfig};
 use crate::image_io::ImageError;
 use crate::lod::LodError;
 use crate::ocean::OceanError;
@@ -74,9 +74,39 @@ pub enum RenderError {
 /// Any fold warns.
 pub const MAX_FOLDED_FRACTION: f64 = 0.10;
 
-/// Bytes a triangle of the tessellation takes with its share of the vertices and the BVH
-/// (paper-high's 22.3 M triangles peak at 2.7 GB in a whole render: 120 bytes each).
-pub const BYTES_PER_TRIANGLE: u64 = 120;
+/// Bytes a triangle of the tessellation takes with its share of the vertices and of the
+/// acceleration structure that traces it, from the peak memory of paper-high's 22.3 M triangles
+/// in a whole render less paper-low's (docs/performance.md, "Memory"), rounded up by some 5 %:
+/// Embree's grids 35 B (39 B not compact), Embree's triangles 60 B (123 B not compact), the
+/// Rust BVH 128 B.
+pub fn bytes_per_triangle(backend: Backend, grids: bool, compact: bool) -> u64 {
+    match (backend, grids, compact) {
+        (Backend::Rust, ..) => 135,
+        (Backend::Embree, true, true) => 37,
+        (Backend::Embree, true, false) => 41,
+        (Backend::Embree, false, true) => 64,
+        (Backend::Embree, false, false) => 130,
+    }
+}
+
+/// What a render of `cfg` over `triangles` needs before anything is allocated: its pixels, and
+/// the bytes of its film and of its mesh with what traces it.
+fn memory_needed(
+    cfg: &SceneConfig,
+    triangles: usize,
+    batches: usize,
+    keep_states: bool,
+) -> (u64, u64, u64) {
+    let camera = Camera::new(cfg.camera.aimed(), cfg.camera.width, cfg.camera.aspect);
+    let pixels = (camera.width * camera.height) as u64;
+    let film = super::film::film_bytes(pixels, batches, keep_states);
+    let r = &cfg.render;
+    let grids = r
+        .embree_geometry
+        .grids_for(triangles, pixels * u64::from(r.spp));
+    let mesh = triangles as u64 * bytes_per_triangle(r.backend, grids, r.compact_bvh);
+    (pixels, film, mesh)
+}
 
 /// Refuses a render that cannot fit in memory, before anything is allocated.
 pub(super) fn check_memory(
@@ -85,10 +115,7 @@ pub(super) fn check_memory(
     batches: usize,
     keep_states: bool,
 ) -> Result<(), RenderError> {
-    let camera = Camera::new(cfg.camera.aimed(), cfg.camera.width, cfg.camera.aspect);
-    let pixels = (camera.width * camera.height) as u64;
-    let film = super::film::film_bytes(pixels, batches, keep_states);
-    let mesh = triangles as u64 * BYTES_PER_TRIANGLE;
+    let (pixels, film, mesh) = memory_needed(cfg, triangles, batches, keep_states);
     let need = film + mesh;
     match crate::memory::available_bytes() {
         Some(available) if need > available => Err(RenderError::OutOfMemory {
@@ -100,5 +127,32 @@ pub(super) fn check_memory(
             available,
         }),
         _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::EmbreeGeometry;
+
+    #[test]
+    fn the_memory_check_counts_what_traces_the_mesh() {
+        // paper-high's 22.3 M triangles at 1024 px: grids under `auto` at 16 spp, triangles
+        // past 400 spp; the check's mesh figure follows, within the measured peaks (+ 10 %)
+        let tris = 22_341_600;
+        let mut cfg = SceneConfig::default();
+        cfg.camera.width = 1024;
+        let mesh_gb = |cfg: &SceneConfig| memory_needed(cfg, tris, 8, false).2 as f64 / 1e9;
+        cfg.render.spp = 16;
+        let grids = mesh_gb(&cfg);
+        assert!((0.77..0.85).contains(&grids), "{grids}");
+        cfg.render.spp = 1024;
+        let triangles = mesh_gb(&cfg);
+        assert!((1.35..1.49).contains(&triangles), "{triangles}");
+        cfg.render.embree_geometry = EmbreeGeometry::Grids;
+        assert_eq!(mesh_gb(&cfg), grids);
+        cfg.render.backend = Backend::Rust;
+        let rust = mesh_gb(&cfg);
+        assert!((2.8..3.1).contains(&rust), "{rust}");
     }
 }

@@ -10,7 +10,7 @@ use std::time::Instant;
 use super::film::{PixelState, Samples};
 use super::integrator::{highest_vertex_y, max_slope};
 use super::limits::check_memory;
-pub use super::limits::{BYTES_PER_TRIANGLE, MAX_FOLDED_FRACTION, RenderError};
+pub use super::limits::{MAX_FOLDED_FRACTION, RenderError, bytes_per_triangle};
 pub use super::report::{PassInfo, RenderReport, Rendered, mean_luminance, warnings};
 use super::{Camera, SceneRef, TraceSettings, render_image_samples};
 use crate::accel::bvh::Bvh;
