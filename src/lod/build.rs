@@ -105,12 +105,14 @@ impl Geometry {
     /// order of the index.
     fn attributes(&self, vi: &VertexIndex, earth_r: f64, sampler: &Sampler) -> Attributes {
         let vertices: usize = vi.row_counts.iter().sum();
-        // One spare element: Mesh pads these for Embree without reallocating.
-        let mut positions = Vec::with_capacity(vertices + 1);
-        positions.resize(vertices, [0.0f32; 3]);
+        // One spare element: Mesh pads these for Embree without reallocating. Zeroed
+        // allocations (calloc), so that the pages are first touched where each row is written,
+        // on every core, not cleared on one thread first.
+        let mut positions = vec![[0.0f32; 3]; vertices + 1];
+        positions.truncate(vertices);
         let mut normals = vec![[0.0f32; 3]; vertices];
-        let mut uvs = Vec::with_capacity(vertices + 1);
-        uvs.resize(vertices, [0.0f32; 2]);
+        let mut uvs = vec![[0.0f32; 2]; vertices + 1];
+        uvs.truncate(vertices);
         let pos_chunks = split_by(&mut positions, &vi.row_counts);
         let nrm_chunks = split_by(&mut normals, &vi.row_counts);
         let uv_chunks = split_by(&mut uvs, &vi.row_counts);
