@@ -208,10 +208,16 @@ impl Layer {
                                 column[gap.clone()].fill(C32::default());
                             }
                         }
-                        for (r, &ix) in rows.iter().enumerate() {
-                            let run = &plane[r * n + z0..r * n + z0 + width];
-                            for (dz, v) in run.iter().enumerate() {
-                                b[dz * n + ix] = *v;
+                        // eight band rows at a time, so that each column's cache line is
+                        // written whole, not one value per row (the columns lie n apart, and
+                        // sixteen lines that far apart share a set of the L1 cache)
+                        for (r8, ixs) in rows.chunks(8).enumerate() {
+                            let r0 = r8 * 8;
+                            for dz in 0..width {
+                                let column = &mut b[dz * n..(dz + 1) * n];
+                                for (t, &ix) in ixs.iter().enumerate() {
+                                    column[ix] = plane[(r0 + t) * n + z0 + dz];
+                                }
                             }
                         }
                         fft.process_with_scratch(b, scratch);
