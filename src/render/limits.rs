@@ -6,7 +6,7 @@ use thiserror::Error;
 use super::Camera;
 #[cfg(feature = "embree")]
 use crate::accel::embree::EmbreeError;
-use crate::config::{Backend, ConfigError, SceneConfig};
+use crate::config::{Backend, ConfigError, NormalMode, SceneConfig, SurfaceKind};
 use crate::image_io::ImageError;
 use crate::lod::LodError;
 use crate::ocean::OceanError;
@@ -42,12 +42,13 @@ pub enum RenderError {
     )]
     Folded { folded: f64, choppiness: f64 },
     #[error(
-        "this render needs about {} ({} for the {pixels}-pixel film, {} for {triangles} triangles and their BVH), more than the {} this process can still allocate; lower the width or the tessellation",
-        crate::memory::gigabytes(*need), crate::memory::gigabytes(*film), crate::memory::gigabytes(*mesh), crate::memory::gigabytes(*available)
+        "this render needs about {} ({} for the {pixels}-pixel film, {} for the ocean, {} for {triangles} triangles and their BVH), more than the {} this process can still allocate; lower the width, the tessellation or the ocean's layers",
+        crate::memory::gigabytes(*need), crate::memory::gigabytes(*film), crate::memory::gigabytes(*ocean), crate::memory::gigabytes(*mesh), crate::memory::gigabytes(*available)
     )]
     OutOfMemory {
         need: u64,
         film: u64,
+        ocean: u64,
         mesh: u64,
         pixels: u64,
         triangles: u64,
@@ -89,38 +90,65 @@ pub fn bytes_per_triangle(backend: Backend, grids: bool, compact: bool) -> u64 {
     }
 }
 
+/// Bytes the ocean of `cfg` takes once built, from above: each layer's texels (eight f32
+/// fields, 32 B a cell) and amplitudes (at most a complex f32 a cell), the transforms' planes,
+/// sized for the largest layer (four complex f32 planes over at most half its rows, 16 B a
+/// cell), and what the normals or the surface add: filtered normals' levels (a third of the
+/// texels) or the exact surface's pyramids (under half of them). The default sea: 0.42 GB
+/// counted, 0.37 GB at the peak of `vastocean ocean` (docs/performance.md, "Memory").
+pub fn ocean_bytes(cfg: &SceneConfig) -> u64 {
+    let cells = |n: usize| (n * n) as u64;
+    let layers = &cfg.ocean.layers;
+    let texels: u64 = layers.iter().map(|l| 32 * cells(l.n)).sum();
+    let amplitudes: u64 = layers.iter().map(|l| 8 * cells(l.n)).sum();
+    let planes = layers.iter().map(|l| 16 * cells(l.n)).max().unwrap_or(0);
+    let extra = match (cfg.render.normals, cfg.render.surface) {
+        (NormalMode::Filtered, _) => texels / 3,
+        (_, SurfaceKind::Exact) => texels / 2,
+        _ => 0,
+    };
+    texels + amplitudes + planes + extra
+}
+
 /// What a render of `cfg` over `triangles` needs before anything is allocated: its pixels, and
-/// the bytes of its film and of its mesh with what traces it.
+/// the bytes of its film, of its ocean (0 when it is built already) and of its mesh with what
+/// traces it.
 fn memory_needed(
     cfg: &SceneConfig,
     triangles: usize,
     batches: usize,
     keep_states: bool,
-) -> (u64, u64, u64) {
+    ocean_built: bool,
+) -> (u64, u64, u64, u64) {
     let camera = Camera::new(cfg.camera.aimed(), cfg.camera.width, cfg.camera.aspect);
     let pixels = (camera.width * camera.height) as u64;
     let film = super::film::film_bytes(pixels, batches, keep_states);
+    let ocean = if ocean_built { 0 } else { ocean_bytes(cfg) };
     let r = &cfg.render;
     let grids = r
         .embree_geometry
         .grids_for(triangles, pixels * u64::from(r.spp));
     let mesh = triangles as u64 * bytes_per_triangle(r.backend, grids, r.compact_bvh);
-    (pixels, film, mesh)
+    (pixels, film, ocean, mesh)
 }
 
-/// Refuses a render that cannot fit in memory, before anything is allocated.
+/// Refuses a render that cannot fit in memory, before anything is allocated (the ocean's share
+/// too unless `ocean_built`: shared, or built already).
 pub(super) fn check_memory(
     cfg: &SceneConfig,
     triangles: usize,
     batches: usize,
     keep_states: bool,
+    ocean_built: bool,
 ) -> Result<(), RenderError> {
-    let (pixels, film, mesh) = memory_needed(cfg, triangles, batches, keep_states);
-    let need = film + mesh;
+    let (pixels, film, ocean, mesh) =
+        memory_needed(cfg, triangles, batches, keep_states, ocean_built);
+    let need = film + ocean + mesh;
     match crate::memory::available_bytes() {
         Some(available) if need > available => Err(RenderError::OutOfMemory {
             need,
             film,
+            ocean,
             mesh,
             pixels,
             triangles: triangles as u64,
@@ -142,7 +170,7 @@ mod tests {
         let tris = 22_341_600;
         let mut cfg = SceneConfig::default();
         cfg.camera.width = 1024;
-        let mesh_gb = |cfg: &SceneConfig| memory_needed(cfg, tris, 8, false).2 as f64 / 1e9;
+        let mesh_gb = |cfg: &SceneConfig| memory_needed(cfg, tris, 8, false, true).3 as f64 / 1e9;
         cfg.render.spp = 16;
         let grids = mesh_gb(&cfg);
         assert!((0.77..0.85).contains(&grids), "{grids}");
@@ -154,5 +182,25 @@ mod tests {
         cfg.render.backend = Backend::Rust;
         let rust = mesh_gb(&cfg);
         assert!((2.8..3.1).contains(&rust), "{rust}");
+    }
+
+    #[test]
+    fn the_memory_check_counts_the_ocean_unless_it_is_built() {
+        // the default sea: 0.37 GB at the peak of `vastocean ocean`, counted from above
+        let mut cfg = SceneConfig::default();
+        let gb = ocean_bytes(&cfg) as f64 / 1e9;
+        assert!((0.37..0.45).contains(&gb), "{gb}");
+        assert_eq!(memory_needed(&cfg, 0, 8, false, true).2, 0);
+        assert_eq!(memory_needed(&cfg, 0, 8, false, false).2, ocean_bytes(&cfg));
+        // filtered normals' levels add a third of the texels
+        cfg.render.normals = NormalMode::Filtered;
+        assert!(ocean_bytes(&cfg) as f64 / 1e9 > gb + 0.08);
+        // a 4096-texel layer more: half a gigabyte of texels alone
+        cfg.render.normals = NormalMode::Mapped;
+        let n = cfg.ocean.layers[0];
+        cfg.ocean
+            .layers
+            .push(crate::ocean::LayerSpec { n: 4096, ..n });
+        assert!(ocean_bytes(&cfg) as f64 / 1e9 > gb + 0.5 + 0.13);
     }
 }

@@ -174,6 +174,7 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
         crate::lod::try_count(&lod)?.triangles,
         super::film::MAX_BATCHES,
         false,
+        shared_ocean.is_some(),
     )?;
     let pool = tracing_pool(cfg.render.threads)?;
     let threads = pool.current_num_threads();
@@ -433,7 +434,7 @@ impl Prepared {
             sky: &self.sky,
             objects: self.objects.as_ref(),
         };
-        check_memory(cfg, 0, batches, keep_states)?;
+        check_memory(cfg, 0, batches, keep_states, true)?;
         let mut settings = TraceSettings::new(cfg, self.sky_irradiance);
         settings.must_hit_below_y = self.must_hit_below_y(cfg.camera.height_m);
         let t = Instant::now();
