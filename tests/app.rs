@@ -238,8 +238,8 @@ fn tiny_compare_runs_end_to_end_and_writes_every_file() {
 
 #[test]
 fn bench_accuracy_writes_its_files_and_a_configuration_matches_itself() {
-    use app::bench::accuracy::{AccuracyJob, Tessellation};
-    use vastocean::config::LodChoice;
+    use app::bench::accuracy::{AccuracyJob, ExactSweep, Tessellation};
+    use vastocean::config::{LodChoice, SurfaceKind};
     let dir = tmp("bench-accuracy");
     let mut scene = AccuracyJob::default_scene();
     scene.render.threads = 2;
@@ -258,18 +258,38 @@ fn bench_accuracy_writes_its_files_and_a_configuration_matches_itself() {
         reference_spp: 32,
         reference_spp_max: 512,
         reference_max_boost: 4,
+        exact: Some(ExactSweep {
+            tessellation: Tessellation::preset(LodChoice::PaperLow),
+            spp: vec![8],
+        }),
         out: dir.clone(),
         progress: false,
     };
     let r = app::bench::accuracy::run(&job).unwrap();
     assert_eq!(
         r.points.len(),
-        12,
-        "two tessellations: mapped, vertex and filtered, 8 and 32 spp"
+        13,
+        "two tessellations: mapped, vertex and filtered, 8 and 32 spp; the exact surface at 8"
     );
     assert!(
-        (r.points[4..6].iter().chain(&r.points[10..])).all(|p| p.normals == NormalMode::Filtered)
+        (r.points[4..6].iter().chain(&r.points[10..12])).all(|p| p.normals == NormalMode::Filtered)
     );
+    // The exact surface's point: paper-low's prisms, mapped normals, measured like the rest
+    // (its set-up its own: the prisms and the pyramids).
+    let exact = &r.points[12];
+    assert_eq!(
+        (exact.lod.as_str(), exact.normals, exact.surface, exact.spp),
+        ("paper-low", NormalMode::Mapped, SurfaceKind::Exact, 8)
+    );
+    assert!(exact.error.is_finite() && exact.error_ci[0] <= exact.error_ci[1]);
+    assert!(
+        r.points[..12]
+            .iter()
+            .all(|p| p.surface == SurfaceKind::Mesh)
+    );
+    let csv = std::fs::read_to_string(dir.join("frontier.csv")).unwrap();
+    assert!(csv.starts_with("lod,normals,surface,spp,"), "{csv}");
+    assert!(csv.contains("paper-low,mapped,exact,8,"), "{csv}");
     // One ocean for every tessellation and the reference, its build counted in each point as
     // a render of its own would count it.
     assert_eq!(r.oceans_built, 1);

@@ -29,6 +29,11 @@ pub enum BenchCommand {
         /// group on the frontier.
         #[arg(long)]
         filtered: bool,
+        /// Also render the exact surface (docs/exact.md) inside paper-low's prisms, with mapped
+        /// normals, at the sweep's samples per pixel up to 64: a fourth group (slow: some
+        /// 7 minutes more at 1024 px).
+        #[arg(long)]
+        exact: bool,
         /// What to do when a shading normal would send a ray to the wrong side of its triangle,
         /// in every render of the sweep and its reference (default: the scene's, terminate
         /// unless its file says otherwise; docs/accuracy.md, "The wrong-side policy").
@@ -68,7 +73,7 @@ pub enum BenchCommand {
 pub fn run(c: BenchCommand) -> Result<()> {
     match c {
         #[rustfmt::skip]
-        BenchCommand::Accuracy { out, config, quick, filtered, wrong_side, interp, threads, json } => {
+        BenchCommand::Accuracy { out, config, quick, filtered, exact, wrong_side, interp, threads, json } => {
             let mut scene = match &config {
                 Some(path) => SceneConfig::load(path).map_err(AppError::from)?,
                 None => app::bench::accuracy::AccuracyJob::default_scene(),
@@ -84,6 +89,9 @@ pub fn run(c: BenchCommand) -> Result<()> {
             job.progress = true;
             if filtered {
                 job.normals.push(vastocean::config::NormalMode::Filtered);
+            }
+            if exact {
+                job = job.with_exact();
             }
             emit(&app::bench::accuracy::run(&job)?, json)
         }

@@ -28,7 +28,7 @@ use super::{Progress, near_size_lod};
 use crate::analysis::error::{Interval, MIN_BATCHES};
 use crate::app::AppError;
 use crate::app::compare::sampling;
-use crate::config::{LodChoice, LodConfig, NormalMode, Projection, SceneConfig};
+use crate::config::{LodChoice, LodConfig, NormalMode, Projection, SceneConfig, SurfaceKind};
 use crate::render::Camera;
 use crate::render::film::MAX_BATCHES;
 use crate::render::pipeline::prepare_with;
@@ -84,9 +84,23 @@ pub struct AccuracyJob {
     /// Most samples a noisy reference pixel may take, in multiples of its spp (see
     /// `crate::app::compare::sampling`).
     pub reference_max_boost: u16,
+    /// Also the exact surface (docs/exact.md) inside one tessellation's prisms, with mapped
+    /// normals, at these samples per pixel: a fourth group (`--exact`).
+    pub exact: Option<ExactSweep>,
     pub out: PathBuf,
     pub progress: bool,
 }
+
+/// The exact surface's points of the sweep: its coarse tessellation and samples per pixel.
+#[derive(Clone, Debug)]
+pub struct ExactSweep {
+    pub tessellation: Tessellation,
+    pub spp: Vec<u32>,
+}
+
+/// Most samples per pixel `--exact` renders the exact surface at: its trace is some 30x
+/// paper-high's per sample (docs/exact.md), so 8 to 64 spp at 1024 px take some 7 minutes.
+pub const EXACT_MAX_SPP: u32 = 64;
 
 impl AccuracyJob {
     /// The scene the benchmark measures unless told otherwise: the default scene's ocean and
@@ -125,8 +139,27 @@ impl AccuracyJob {
             reference_spp: 4096,
             reference_spp_max: 65536,
             reference_max_boost: 64,
+            exact: None,
             out,
             progress: true,
+        }
+    }
+
+    /// This sweep with the exact surface in paper-low's prisms at its sample counts up to
+    /// [`EXACT_MAX_SPP`] (`--exact`).
+    pub fn with_exact(self) -> AccuracyJob {
+        let spp = self
+            .spp
+            .iter()
+            .copied()
+            .filter(|&n| n <= EXACT_MAX_SPP)
+            .collect();
+        AccuracyJob {
+            exact: Some(ExactSweep {
+                tessellation: Tessellation::preset(LodChoice::PaperLow),
+                spp,
+            }),
+            ..self
         }
     }
 
@@ -155,6 +188,8 @@ impl AccuracyJob {
 pub struct Point {
     pub lod: String,
     pub normals: NormalMode,
+    /// The mesh's triangles, or the exact surface inside their prisms.
+    pub surface: SurfaceKind,
     pub spp: u32,
     pub triangles: usize,
     pub seconds_ocean: f64,
@@ -251,6 +286,14 @@ fn scene_with(job: &AccuracyJob, t: &Tessellation) -> SceneConfig {
     s
 }
 
+/// The exact surface's scene: `t`'s prisms, mapped normals.
+fn exact_scene(job: &AccuracyJob, t: &Tessellation) -> SceneConfig {
+    let mut s = scene_with(job, t);
+    s.render.surface = SurfaceKind::Exact;
+    s.render.normals = NormalMode::Mapped;
+    s
+}
+
 /// The reference's scene: the analysed rows only, its own sample seeds.
 fn reference_scene(job: &AccuracyJob) -> SceneConfig {
     let mut s = scene_with(job, &job.reference);
@@ -268,10 +311,17 @@ fn check(job: &AccuracyJob) -> Result<(), AppError> {
         s.validate()?;
         crate::lod::params_for(&s.lod, &s.camera)?;
     }
+    if let Some(x) = &job.exact {
+        let s = exact_scene(job, &x.tessellation);
+        s.validate()?;
+        crate::lod::params_for(&s.lod, &s.camera)?;
+    }
     let k = MAX_BATCHES as u32;
+    let exact_spp = job.exact.iter().flat_map(|x| &x.spp);
     if let Some(bad) = job
         .spp
         .iter()
+        .chain(exact_spp)
         .chain([&job.reference_spp])
         .find(|&&n| n < MIN_BATCHES as u32 || n % k != 0)
     {
@@ -308,13 +358,20 @@ fn not_monotone(points: &[Point]) -> Vec<String> {
     for (i, a) in points.iter().enumerate() {
         let next = points[i + 1..]
             .iter()
-            .filter(|b| b.lod == a.lod && b.normals == a.normals && b.spp > a.spp)
+            .filter(|b| {
+                b.lod == a.lod && b.normals == a.normals && b.surface == a.surface && b.spp > a.spp
+            })
             .min_by_key(|b| b.spp);
         if let Some(b) = next
             && b.error_ci[0] > a.error_ci[1]
         {
+            let exact = if a.surface == SurfaceKind::Exact {
+                " exact"
+            } else {
+                ""
+            };
             out.push(format!(
-                "{} {} {} -> {} spp",
+                "{}{exact} {} {} -> {} spp",
                 a.lod, a.normals, a.spp, b.spp
             ));
         }
@@ -327,9 +384,10 @@ pub fn run(job: &AccuracyJob) -> Result<AccuracyReport, AppError> {
     crate::app::check_output_dir(&job.out)?;
     let t0 = Instant::now();
     let per_tess = (job.normals.len() * job.spp.len()) as u64;
+    let exact = job.exact.as_ref().map_or(0, |x| x.spp.len()) as u64;
     let progress = Progress::new(
         job.progress,
-        job.tessellations.len() as u64 * per_tess + 1,
+        job.tessellations.len() as u64 * per_tess + exact + 1,
         "bench accuracy",
     );
     let ref_cfg = reference_scene(job);
@@ -414,6 +472,7 @@ mod tests {
         Point {
             lod: lod.into(),
             normals: NormalMode::Mapped,
+            surface: SurfaceKind::Mesh,
             spp,
             triangles: 0,
             seconds_ocean: 0.0,

@@ -8,7 +8,7 @@ use super::{AccuracyJob, AccuracyReport, Point, REFERENCE_NOISE_SHARE, ROWS, Ref
 use super::{figure, not_monotone};
 use crate::analysis::charts::{FrontierPoint, frontier};
 use crate::app::AppError;
-use crate::config::NormalMode;
+use crate::config::{NormalMode, SurfaceKind};
 use crate::image_io::{stage, write_json};
 
 pub(super) fn write(
@@ -27,14 +27,15 @@ pub(super) fn write(
         use std::io::Write;
         writeln!(
             w,
-            "lod,normals,spp,triangles,seconds_ocean,seconds_tessellation,seconds_build,seconds_trace,seconds_normal_map,seconds_total,memory_bytes,rays,error,error_lo,error_hi,bias,bias_lo,bias_hi,bias_resolved,error_plain,noise,rmse_relative,rmse_relative_lo,rmse_relative_hi,pareto"
+            "lod,normals,surface,spp,triangles,seconds_ocean,seconds_tessellation,seconds_build,seconds_trace,seconds_normal_map,seconds_total,memory_bytes,rays,error,error_lo,error_hi,bias,bias_lo,bias_hi,bias_resolved,error_plain,noise,rmse_relative,rmse_relative_lo,rmse_relative_hi,pareto"
         )?;
         for p in &points {
             writeln!(
                 w,
-                "{},{},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{},{:.6},{:.6},{:.6},{:.6},{:.6},{}",
+                "{},{},{},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{},{:.6},{:.6},{:.6},{:.6},{:.6},{}",
                 p.lod,
                 p.normals,
+                p.surface,
                 p.spp,
                 p.triangles,
                 p.seconds_ocean,
@@ -62,23 +63,43 @@ pub(super) fn write(
         }
         Ok(())
     })?;
+    // The groups on the chart, those the sweep has, in this order.
+    let group_of = |p: &Point| match (p.surface, p.normals) {
+        (SurfaceKind::Exact, _) => 3,
+        (_, NormalMode::Mapped) => 0,
+        // (bench accuracy renders no flat-shaded mesh; grouped with the unmapped)
+        (_, NormalMode::Vertex | NormalMode::Geometric) => 1,
+        (_, NormalMode::Filtered) => 2,
+    };
+    let names = [
+        "mapped normals",
+        "vertex normals",
+        "filtered normals",
+        "exact surface, mapped normals",
+    ];
+    let present: Vec<usize> = (0..names.len())
+        .filter(|&g| points.iter().any(|p| group_of(p) == g))
+        .collect();
+    // each group's largest spp, whose points are labelled
+    let last_spp = |p: &Point| match (p.surface, &job.exact) {
+        (SurfaceKind::Exact, Some(x)) => x.spp.last().copied().unwrap_or(0),
+        _ => job.spp.last().copied().unwrap_or(0),
+    };
     let chart: Vec<FrontierPoint> = points
         .iter()
         .map(|p| FrontierPoint {
             seconds: p.seconds_total,
             error: p.error,
             error_ci: p.error_ci,
-            group: match p.normals {
-                NormalMode::Mapped => 0,
-                // (bench accuracy renders no flat-shaded mesh; grouped with the unmapped)
-                NormalMode::Vertex | NormalMode::Geometric => 1,
-                NormalMode::Filtered => 2,
-            },
+            group: present.iter().position(|&g| g == group_of(p)).unwrap_or(0),
             pareto: p.pareto,
-            label: (p.lod.starts_with("paper") && p.spp == *job.spp.last().unwrap_or(&0))
-                .then(|| format!("  {} {}", p.lod, p.normals)),
+            label: (p.lod.starts_with("paper") && p.spp == last_spp(p)).then(|| match p.surface {
+                SurfaceKind::Exact => format!("  {} exact", p.lod),
+                SurfaceKind::Mesh => format!("  {} {}", p.lod, p.normals),
+            }),
         })
         .collect();
+    let groups: Vec<&str> = present.iter().map(|&g| names[g]).collect();
     frontier(
         &png,
         &format!(
@@ -86,14 +107,7 @@ pub(super) fn write(
             reference.lod, reference.spp, job.width
         ),
         "std of the luminance difference from the converged image",
-        &["mapped normals", "vertex normals", "filtered normals"][..if job
-            .normals
-            .contains(&NormalMode::Filtered)
-        {
-            3
-        } else {
-            2
-        }],
+        &groups,
         &chart,
     )
     .map_err(|m| AppError::Run(format!("cannot draw {}: {m}", png.display()).into()))?;
@@ -150,14 +164,15 @@ impl fmt::Display for AccuracyReport {
         )?;
         writeln!(
             f,
-            "  lod          normals   spp   triangles   seconds   error, noise included [95%]   bias [95%]                  rel. RMSE [95%]           front"
+            "  lod          normals   surface  spp   triangles   seconds   error, noise included [95%]   bias [95%]                  rel. RMSE [95%]           front"
         )?;
         for p in &self.points {
             writeln!(
                 f,
-                "  {:<12} {:<8} {:>4} {:>11} {:>9.2}   {:<29} {:<27} {:.4} [{:.4}, {:.4}]   {}",
+                "  {:<12} {:<8}  {:<7} {:>4} {:>11} {:>9.2}   {:<29} {:<27} {:.4} [{:.4}, {:.4}]   {}",
                 p.lod,
                 p.normals.to_string(),
+                p.surface.to_string(),
                 p.spp,
                 p.triangles,
                 p.seconds_total,

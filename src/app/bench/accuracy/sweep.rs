@@ -4,13 +4,13 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use super::{AccuracyJob, Point, ROWS, scene_with};
+use super::{AccuracyJob, Point, ROWS, exact_scene, scene_with};
 use crate::analysis::error::{Estimator, Inputs};
 use crate::app::AppError;
 use crate::app::bench::Progress;
 use crate::app::compare::sampling;
 use crate::color::luminance;
-use crate::config::SceneConfig;
+use crate::config::{NormalMode, SceneConfig, SurfaceKind};
 use crate::ocean::Surface;
 use crate::render::Camera;
 use crate::render::film::{Film, MAX_BATCHES, Samples};
@@ -24,7 +24,8 @@ pub(super) struct Rendered {
 }
 
 /// Renders every configuration, each tessellation prepared once, all of them on one ocean and
-/// one sky (built by the first); keeps each film's band. A point's time counts the ocean's
+/// one sky (built by the first), then the exact surface's points (their own preparation: the
+/// prisms and the layers' pyramids); keeps each film's band. A point's time counts the ocean's
 /// build as a render of its own would.
 pub(super) fn render_points(
     job: &AccuracyJob,
@@ -33,15 +34,31 @@ pub(super) fn render_points(
 ) -> Result<(Vec<Rendered>, Shared), AppError> {
     let mut out = Vec::new();
     let mut shared: Option<Shared> = None;
-    for t in &job.tessellations {
-        let cfg = scene_with(job, t);
+    let exact = job.exact.iter().map(|x| {
+        let modes = vec![(NormalMode::Mapped, SurfaceKind::Exact)];
+        (
+            &x.tessellation,
+            exact_scene(job, &x.tessellation),
+            modes,
+            &x.spp,
+        )
+    });
+    let meshes = job.tessellations.iter().map(|t| {
+        let modes = job
+            .normals
+            .iter()
+            .map(|&n| (n, SurfaceKind::Mesh))
+            .collect();
+        (t, scene_with(job, t), modes, &job.spp)
+    });
+    for (t, cfg, modes, spps) in meshes.chain(exact) {
         let p = prepare_with(&cfg, Shared::setup(shared.as_ref()))?;
         let first = shared.get_or_insert_with(|| Shared::of(&p));
         first.count(&p);
         let set_up = first.seconds_ocean + p.seconds_tessellation + p.seconds_build;
         let structures = (p.ocean.bytes() + p.accel.mesh().bytes()) as u64 + p.accel.bytes();
-        for &normals in &job.normals {
-            for &spp in &job.spp {
+        for (normals, surface) in modes {
+            for &spp in spps {
                 let mut c = cfg.clone();
                 c.render.normals = normals;
                 c.render.spp = spp;
@@ -55,6 +72,7 @@ pub(super) fn render_points(
                     point: Point {
                         lod: t.name.clone(),
                         normals,
+                        surface,
                         spp,
                         triangles: rep.triangles,
                         seconds_ocean: first.seconds_ocean,
@@ -78,7 +96,12 @@ pub(super) fn render_points(
                     },
                     band: band_film,
                 });
-                progress.step(format!("{} {normals} {spp} spp", t.name));
+                let exact = if surface == SurfaceKind::Exact {
+                    " on the exact surface"
+                } else {
+                    ""
+                };
+                progress.step(format!("{} {normals}{exact} {spp} spp", t.name));
             }
         }
     }
