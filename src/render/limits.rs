@@ -170,6 +170,8 @@ mod tests {
         let tris = 22_341_600;
         let mut cfg = SceneConfig::default();
         cfg.camera.width = 1024;
+        // (the default backend is the Rust BVH in a build without Embree)
+        cfg.render.backend = Backend::Embree;
         let mesh_gb = |cfg: &SceneConfig| memory_needed(cfg, tris, 8, false, true).3 as f64 / 1e9;
         cfg.render.spp = 16;
         let grids = mesh_gb(&cfg);
