@@ -140,6 +140,11 @@ pub fn frontier(
         let e = |e: DrawingAreaErrorKind<_>| e.to_string();
         root.fill(&WHITE).map_err(e)?;
         let xs = log_range(points.iter().map(|p| p.seconds));
+        // room on the right for the labels of the slowest points
+        let xs = match points.iter().any(|p| p.label.is_some()) {
+            true => (xs.0, xs.1 * 2.5),
+            false => xs,
+        };
         let y_hi = points
             .iter()
             .map(|p| p.error_ci[1].max(p.error))
