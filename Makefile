@@ -54,6 +54,7 @@ bench-report: build
 	./target/release/vastocean bench bvh --out benches/results/bvh
 	./target/release/vastocean bench accuracy --wrong-side bend --interp bilinear --out benches/results/accuracy
 	./target/release/vastocean bench accuracy --filtered --interp bilinear --out benches/results/accuracy-filtered
+	./target/release/vastocean bench accuracy --exact --wrong-side bend --interp bilinear --out benches/results/accuracy-exact
 
 # The paper's study (docs/comparison.md): plans STUDY if it has no plan
 # yet (STUDY_FLAGS go to `study plan`), runs its unfinished cases with GNU parallel, one case per
