@@ -468,6 +468,11 @@ impl Surface {
         self.levels.get_or_init(|| Levels::new(&self.layers))
     }
 
+    /// Whether [`Surface::levels`] are built (the memory check counts them until they are).
+    pub fn levels_built(&self) -> bool {
+        self.levels.get().is_some()
+    }
+
     /// A lower bound on J = (1 + dDx/dx)(1 + dDz/dz) - (dDx/dz)^2 over every read of the summed
     /// surface, from each layer's largest strains over its grid points. A bilinear read is a
     /// convex blend of four texels, so no field it returns is larger than the field's largest

@@ -93,56 +93,99 @@ pub fn bytes_per_triangle(backend: Backend, grids: bool, compact: bool) -> u64 {
 /// Bytes the ocean of `cfg` takes once built, from above: each layer's texels (eight f32
 /// fields, 32 B a cell) and amplitudes (at most a complex f32 a cell), the transforms' planes,
 /// sized for the largest layer (four complex f32 planes over at most half its rows, 16 B a
-/// cell), and what the normals or the surface add: filtered normals' levels (a third of the
-/// texels) or the exact surface's pyramids (under half of them). The default sea: 0.42 GB
-/// counted, 0.37 GB at the peak of `vastocean ocean` (docs/performance.md, "Memory").
+/// cell). The default sea: 0.42 GB counted, 0.37 GB at the peak of `vastocean ocean`
+/// (docs/performance.md, "Memory"). What the normals or the surface add is [`ocean_extra_bytes`].
 pub fn ocean_bytes(cfg: &SceneConfig) -> u64 {
-    let cells = |n: usize| (n * n) as u64;
     let layers = &cfg.ocean.layers;
-    let texels: u64 = layers.iter().map(|l| 32 * cells(l.n)).sum();
+    let texels = texel_bytes(cfg);
     let amplitudes: u64 = layers.iter().map(|l| 8 * cells(l.n)).sum();
     let planes = layers.iter().map(|l| 16 * cells(l.n)).max().unwrap_or(0);
-    let extra = match (cfg.render.normals, cfg.render.surface) {
-        (NormalMode::Filtered, _) => texels / 3,
-        (_, SurfaceKind::Exact) => texels / 2,
+    texels + amplitudes + planes
+}
+
+/// What a render of `cfg` adds to its ocean, as far as it is not built already: filtered
+/// normals' levels (a third of the texels, built on an ocean's first filtered render and kept
+/// with it) or the exact surface's pyramids (under half of them, built with every scene that
+/// traces the exact surface).
+pub fn ocean_extra_bytes(cfg: &SceneConfig, levels_built: bool, pyramids_built: bool) -> u64 {
+    match (cfg.render.normals, cfg.render.surface) {
+        (NormalMode::Filtered, _) if !levels_built => texel_bytes(cfg) / 3,
+        (NormalMode::Filtered, _) => 0,
+        (_, SurfaceKind::Exact) if !pyramids_built => texel_bytes(cfg) / 2,
         _ => 0,
-    };
-    texels + amplitudes + planes + extra
+    }
+}
+
+fn cells(n: usize) -> u64 {
+    (n * n) as u64
+}
+
+fn texel_bytes(cfg: &SceneConfig) -> u64 {
+    cfg.ocean.layers.iter().map(|l| 32 * cells(l.n)).sum()
+}
+
+/// What of a render's ocean is built when its memory is checked.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum OceanAtHand {
+    /// Nothing: a scene that builds its own ocean.
+    None,
+    /// The ocean (shared by another scene), and filtered normals' levels if `levels`; the
+    /// scene's exact-surface pyramids are still to build.
+    Shared { levels: bool },
+    /// A prepared scene's: all but filtered normals' levels unless `levels`.
+    Prepared { levels: bool },
 }
 
 /// What a render of `cfg` over `triangles` needs before anything is allocated: its pixels, and
-/// the bytes of its film, of its ocean (0 when it is built already) and of its mesh with what
+/// the bytes of its film, of its ocean (what is not built already) and of its mesh with what
 /// traces it.
 fn memory_needed(
     cfg: &SceneConfig,
     triangles: usize,
     batches: usize,
     keep_states: bool,
-    ocean_built: bool,
+    ocean: OceanAtHand,
 ) -> (u64, u64, u64, u64) {
     let camera = Camera::new(cfg.camera.aimed(), cfg.camera.width, cfg.camera.aspect);
     let pixels = (camera.width * camera.height) as u64;
     let film = super::film::film_bytes(pixels, batches, keep_states);
-    let ocean = if ocean_built { 0 } else { ocean_bytes(cfg) };
+    let ocean = match ocean {
+        OceanAtHand::None => ocean_bytes(cfg) + ocean_extra_bytes(cfg, false, false),
+        OceanAtHand::Shared { levels } => ocean_extra_bytes(cfg, levels, false),
+        OceanAtHand::Prepared { levels } => ocean_extra_bytes(cfg, levels, true),
+    };
     let r = &cfg.render;
-    let grids = r
-        .embree_geometry
-        .grids_for(triangles, pixels * u64::from(r.spp));
+    let grids = embree_grids(cfg, triangles);
     let mesh = triangles as u64 * bytes_per_triangle(r.backend, grids, r.compact_bvh);
     (pixels, film, ocean, mesh)
 }
 
+/// The camera samples a render of `cfg` traces: its pixels times its samples per pixel.
+fn camera_samples(cfg: &SceneConfig) -> u64 {
+    let c = &cfg.camera;
+    let camera = Camera::new(c.aimed(), c.width, c.aspect);
+    (camera.width * camera.height) as u64 * u64::from(cfg.render.spp)
+}
+
+/// Whether Embree takes the `triangles` of a render of `cfg` as grids (its
+/// `render.embree_geometry`, `auto` deciding by the camera samples): what the BVH is built as
+/// and what the memory check counts.
+pub(super) fn embree_grids(cfg: &SceneConfig, triangles: usize) -> bool {
+    cfg.render
+        .embree_geometry
+        .grids_for(triangles, camera_samples(cfg))
+}
+
 /// Refuses a render that cannot fit in memory, before anything is allocated (the ocean's share
-/// too unless `ocean_built`: shared, or built already).
+/// as far as `ocean` is not built already).
 pub(super) fn check_memory(
     cfg: &SceneConfig,
     triangles: usize,
     batches: usize,
     keep_states: bool,
-    ocean_built: bool,
+    ocean: OceanAtHand,
 ) -> Result<(), RenderError> {
-    let (pixels, film, ocean, mesh) =
-        memory_needed(cfg, triangles, batches, keep_states, ocean_built);
+    let (pixels, film, ocean, mesh) = memory_needed(cfg, triangles, batches, keep_states, ocean);
     let need = film + ocean + mesh;
     match crate::memory::available_bytes() {
         Some(available) if need > available => Err(RenderError::OutOfMemory {
@@ -163,6 +206,9 @@ mod tests {
     use super::*;
     use crate::config::EmbreeGeometry;
 
+    /// A shared ocean, without filtered normals' levels.
+    const BUILT: OceanAtHand = OceanAtHand::Shared { levels: false };
+
     #[test]
     fn the_memory_check_counts_what_traces_the_mesh() {
         // paper-high's 22.3 M triangles at 1024 px: grids under `auto` at 16 spp, triangles
@@ -172,7 +218,7 @@ mod tests {
         cfg.camera.width = 1024;
         // (the default backend is the Rust BVH in a build without Embree)
         cfg.render.backend = Backend::Embree;
-        let mesh_gb = |cfg: &SceneConfig| memory_needed(cfg, tris, 8, false, true).3 as f64 / 1e9;
+        let mesh_gb = |cfg: &SceneConfig| memory_needed(cfg, tris, 8, false, BUILT).3 as f64 / 1e9;
         cfg.render.spp = 16;
         let grids = mesh_gb(&cfg);
         assert!((0.77..0.85).contains(&grids), "{grids}");
@@ -190,19 +236,49 @@ mod tests {
     fn the_memory_check_counts_the_ocean_unless_it_is_built() {
         // the default sea: 0.37 GB at the peak of `vastocean ocean`, counted from above
         let mut cfg = SceneConfig::default();
+        let ocean = |cfg: &SceneConfig, at_hand| memory_needed(cfg, 0, 8, false, at_hand).2;
         let gb = ocean_bytes(&cfg) as f64 / 1e9;
         assert!((0.37..0.45).contains(&gb), "{gb}");
-        assert_eq!(memory_needed(&cfg, 0, 8, false, true).2, 0);
-        assert_eq!(memory_needed(&cfg, 0, 8, false, false).2, ocean_bytes(&cfg));
-        // filtered normals' levels add a third of the texels
+        assert_eq!(ocean(&cfg, BUILT), 0);
+        assert_eq!(ocean(&cfg, OceanAtHand::None), ocean_bytes(&cfg));
+        // filtered normals' levels add a third of the texels, unless a shared ocean has them
         cfg.render.normals = NormalMode::Filtered;
-        assert!(ocean_bytes(&cfg) as f64 / 1e9 > gb + 0.08);
-        // a 4096-texel layer more: half a gigabyte of texels alone
+        let levels = ocean(&cfg, OceanAtHand::None) - ocean_bytes(&cfg);
+        assert!(levels as f64 / 1e9 > 0.08, "{levels}");
+        assert_eq!(ocean(&cfg, BUILT), levels);
+        assert_eq!(ocean(&cfg, OceanAtHand::Shared { levels: true }), 0);
+        assert_eq!(ocean(&cfg, OceanAtHand::Prepared { levels: false }), levels);
+        // the exact surface's pyramids are every render's own, shared ocean or not
         cfg.render.normals = NormalMode::Mapped;
+        cfg.render.surface = SurfaceKind::Exact;
+        let pyramids = ocean(&cfg, BUILT);
+        assert!(pyramids as f64 / 1e9 > 0.11, "{pyramids}");
+        assert_eq!(ocean(&cfg, OceanAtHand::None), ocean_bytes(&cfg) + pyramids);
+        assert_eq!(ocean(&cfg, OceanAtHand::Prepared { levels: false }), 0);
+        // a 4096-texel layer more: half a gigabyte of texels alone
+        cfg.render.surface = SurfaceKind::Mesh;
         let n = cfg.ocean.layers[0];
         cfg.ocean
             .layers
             .push(crate::ocean::LayerSpec { n: 4096, ..n });
         assert!(ocean_bytes(&cfg) as f64 / 1e9 > gb + 0.5 + 0.13);
+    }
+
+    #[test]
+    fn the_memory_check_and_the_build_take_the_same_geometry() {
+        // one decision for both: `auto` takes grids for paper-high at 1024 px and 16 spp, and
+        // triangles at 1024 spp, as `grids_for` does with the camera's own sample count
+        let mut cfg = SceneConfig::default();
+        cfg.camera.width = 1024;
+        cfg.render.spp = 16;
+        assert!(embree_grids(&cfg, 22_341_600));
+        assert_eq!(
+            embree_grids(&cfg, 22_341_600),
+            cfg.render
+                .embree_geometry
+                .grids_for(22_341_600, 1024 * 512 * 16)
+        );
+        cfg.render.spp = 1024;
+        assert!(!embree_grids(&cfg, 22_341_600));
     }
 }

@@ -9,8 +9,8 @@ use std::time::Instant;
 
 use super::film::{PixelState, Samples};
 use super::integrator::{highest_vertex_y, max_slope};
-use super::limits::check_memory;
 pub use super::limits::{MAX_FOLDED_FRACTION, RenderError, bytes_per_triangle};
+use super::limits::{OceanAtHand, check_memory};
 pub use super::report::{PassInfo, RenderReport, Rendered, mean_luminance, warnings};
 use super::{Camera, SceneRef, TraceSettings, render_image_samples};
 use crate::accel::bvh::Bvh;
@@ -174,7 +174,12 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
         crate::lod::try_count(&lod)?.triangles,
         super::film::MAX_BATCHES,
         false,
-        shared_ocean.is_some(),
+        match &shared_ocean {
+            Some(o) => OceanAtHand::Shared {
+                levels: o.levels_built(),
+            },
+            None => OceanAtHand::None,
+        },
     )?;
     let pool = tracing_pool(cfg.render.threads)?;
     let threads = pool.current_num_threads();
@@ -282,10 +287,7 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
                         BuildOptions::default().quality
                     },
                     compact: cfg.render.compact_bvh,
-                    grids: cfg
-                        .render
-                        .embree_geometry
-                        .grids_for(mesh.triangle_count(), camera_samples(cfg)),
+                    grids: super::limits::embree_grids(cfg, mesh.triangle_count()),
                     ..BuildOptions::default()
                 };
                 let scene = Scene::new(&device, mesh, options)?;
@@ -397,6 +399,14 @@ impl Prepared {
         let cfg = placed.as_ref();
         let camera = Camera::new(cfg.camera.aimed(), cfg.camera.width, cfg.camera.aspect);
         let filtered = cfg.render.normals == crate::config::NormalMode::Filtered;
+        let levels = self.ocean.levels_built();
+        check_memory(
+            cfg,
+            0,
+            batches,
+            keep_states,
+            OceanAtHand::Prepared { levels },
+        )?;
         let levels_start = Instant::now();
         let sampler = self.ocean.sampler(self.camera_position_m);
         // filtered normals read the layers' low-passed levels for the waves a footprint resolves
@@ -434,7 +444,6 @@ impl Prepared {
             sky: &self.sky,
             objects: self.objects.as_ref(),
         };
-        check_memory(cfg, 0, batches, keep_states, true)?;
         let mut settings = TraceSettings::new(cfg, self.sky_irradiance);
         settings.must_hit_below_y = self.must_hit_below_y(cfg.camera.height_m);
         let t = Instant::now();
@@ -577,11 +586,3 @@ use mount::prepare_mounted;
 #[cfg(test)]
 #[path = "pipeline_tests.rs"]
 mod tests;
-
-/// The camera samples a render of `cfg` traces (its pixels times its samples per pixel).
-#[cfg(feature = "embree")]
-fn camera_samples(cfg: &SceneConfig) -> u64 {
-    let c = &cfg.camera;
-    let camera = super::camera::Camera::new(c.aimed(), c.width, c.aspect);
-    (camera.width * camera.height) as u64 * u64::from(cfg.render.spp)
-}
