@@ -35,6 +35,16 @@ impl Rng {
         Rng { state }
     }
 
+    /// The stream keyed by this one's keys and then `key`: `Rng::keyed(&[a, b]).then(c)` is
+    /// `Rng::keyed(&[a, b, c])`, so keys shared by many streams (a pixel's) are hashed once.
+    /// Only for a stream that has not drawn yet (its state is still the keys' hash).
+    #[inline]
+    pub fn then(&self, key: u64) -> Rng {
+        Rng {
+            state: mix64(self.state ^ mix64(key)),
+        }
+    }
+
     #[inline]
     pub fn next_u64(&mut self) -> u64 {
         self.state = self.state.wrapping_add(GOLDEN);
@@ -77,6 +87,18 @@ impl Rng {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_stream_keyed_in_two_steps_is_the_stream_keyed_at_once() {
+        let pixel = Rng::keyed(&[7, 12345]);
+        for s in [0, 1, 15, u64::MAX] {
+            let (mut a, mut b) = (pixel.then(s), Rng::keyed(&[7, 12345, s]));
+            for _ in 0..4 {
+                assert_eq!(a.next_u64(), b.next_u64());
+            }
+        }
+        assert_ne!(pixel.then(1).next_u64(), pixel.then(2).next_u64());
+    }
 
     #[test]
     fn keyed_streams_are_reproducible_and_distinct() {

@@ -219,9 +219,9 @@ struct PixelSums {
 
 impl PixelSums {
     fn add(&mut self, batch: usize, l: Vec3) {
-        self.state.add(l);
-        let y = luminance(l.to_array()) as f64;
-        self.batch[batch] += y;
+        let y = luminance(l.to_array());
+        self.state.add_with_luminance(l, y);
+        self.batch[batch] += y as f64;
         self.batch_n[batch] += 1;
     }
 }
@@ -320,8 +320,10 @@ pub fn render_image_samples(
                     let mut acc = PixelSums::default();
                     // Each sequence runs its own rotated R2 pattern, so batches are independent
                     // renders (their noise estimate is unbiased).
+                    // (the keys [seed, pixel] every stream of the pixel starts with, hashed once)
+                    let keys = Rng::keyed(&[seed, pixel]);
                     let offsets: [(f64, f64); MAX_BATCHES] = std::array::from_fn(|b| {
-                        let mut rot = Rng::keyed(&[seed, pixel, u64::MAX - b as u64]);
+                        let mut rot = keys.then(u64::MAX - b as u64);
                         (rot.f64(), rot.f64())
                     });
                     // The triangle the pixel's centre ray hits, which its camera rays take
@@ -359,7 +361,7 @@ pub fn render_image_samples(
                             let jy = (oy + j * R2.1).fract() as f32;
                             let dir = pixel_rays.direction(jx, jy);
                             *ray = Ray::new(origin, dir.to_array());
-                            *rng = Rng::keyed(&[seed, pixel, s as u64]);
+                            *rng = keys.then(s as u64);
                         }
                         let mut ls = [Vec3::ZERO; CAMERA_BATCH];
                         scene.radiance_camera_batch(

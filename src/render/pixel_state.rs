@@ -5,7 +5,6 @@
 use ethnum::U256;
 use glam::Vec3;
 
-use crate::color::luminance;
 
 /// Units of the fixed-point radiance sums per unit of radiance: 2^47 (radiance below about
 /// 7e-15 rounds to 0). With radiances up to `crate::config::MAX_RADIANCE` (1e18 < 2^60) and at
@@ -54,12 +53,19 @@ impl PixelState {
     /// Bytes of one state in a pass file.
     pub const BYTES: usize = 3 * 16 + 16 + 32 + 4;
 
+    #[cfg(test)]
     pub(super) fn add(&mut self, l: Vec3) {
+        self.add_with_luminance(l, crate::color::luminance(l.to_array()));
+    }
+
+    /// [`Self::add`] of `l` whose luminance `y` the caller has computed.
+    #[inline]
+    pub(super) fn add_with_luminance(&mut self, l: Vec3, y: f32) {
         for k in 0..3 {
             self.sum[k] += to_fixed(l[k]);
         }
         // Radiance is >= 0 (the guard drops anything else), so is its luminance.
-        let y = to_fixed(luminance(l.to_array()).max(0.0)) as u128;
+        let y = to_fixed(y.max(0.0)) as u128;
         self.sum_y += y;
         self.sum_y2 += square(y);
         self.n += 1;
