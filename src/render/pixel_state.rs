@@ -5,7 +5,6 @@
 use ethnum::U256;
 use glam::Vec3;
 
-
 /// Units of the fixed-point radiance sums per unit of radiance: 2^47 (radiance below about
 /// 7e-15 rounds to 0). With radiances up to `crate::config::MAX_RADIANCE` (1e18 < 2^60) and at
 /// most 1e6 < 2^20 samples, sums stay below 2^127 and sums of squares below 2^234.
@@ -156,6 +155,19 @@ mod tests {
             1e-30,
         ] {
             assert_eq!(to_fixed(x), rounded(x), "{x:e}");
+        }
+    }
+
+    #[test]
+    fn fixed_point_conversion_matches_rounding_across_the_floats() {
+        // a million bit patterns spread over every exponent and sign, and each exponent's
+        // first, middle and last significands (the fast path's edge at 2^53, ties among them)
+        let spread = (0..=u32::MAX).step_by(4099);
+        let edges = (0..512u32)
+            .flat_map(|se| [0, 1, 0x40_0000, 0x40_0001, 0x7f_ffff].map(|m| se << 23 | m));
+        for bits in spread.chain(edges) {
+            let x = f32::from_bits(bits);
+            assert_eq!(to_fixed(x), rounded(x), "{x:e} ({bits:#x})");
         }
     }
 
