@@ -129,8 +129,9 @@ fn texel_bytes(cfg: &SceneConfig) -> u64 {
 pub(super) enum OceanAtHand {
     /// Nothing: a scene that builds its own ocean.
     None,
-    /// The ocean (shared by another scene), and filtered normals' levels if `levels`; the
-    /// scene's exact-surface pyramids are still to build.
+    /// The ocean, built already (shared by another scene, or by a mounted camera's placing),
+    /// and filtered normals' levels if `levels`; the scene's exact-surface pyramids are still
+    /// to build.
     Shared { levels: bool },
     /// A prepared scene's: all but filtered normals' levels unless `levels`.
     Prepared { levels: bool },
@@ -169,11 +170,14 @@ fn camera_samples(cfg: &SceneConfig) -> u64 {
 
 /// Whether Embree takes the `triangles` of a render of `cfg` as grids (its
 /// `render.embree_geometry`, `auto` deciding by the camera samples): what the BVH is built as
-/// and what the memory check counts.
+/// and what the memory check counts. Never for the exact surface, whose coarse triangles bound
+/// user geometry.
 pub(super) fn embree_grids(cfg: &SceneConfig, triangles: usize) -> bool {
-    cfg.render
-        .embree_geometry
-        .grids_for(triangles, camera_samples(cfg))
+    cfg.render.surface == SurfaceKind::Mesh
+        && cfg
+            .render
+            .embree_geometry
+            .grids_for(triangles, camera_samples(cfg))
 }
 
 /// Refuses a render that cannot fit in memory, before anything is allocated (the ocean's share
@@ -207,7 +211,7 @@ mod tests {
     use crate::config::EmbreeGeometry;
 
     /// A shared ocean, without filtered normals' levels.
-    const BUILT: OceanAtHand = OceanAtHand::Shared { levels: false };
+    const SHARED: OceanAtHand = OceanAtHand::Shared { levels: false };
 
     #[test]
     fn the_memory_check_counts_what_traces_the_mesh() {
@@ -218,7 +222,7 @@ mod tests {
         cfg.camera.width = 1024;
         // (the default backend is the Rust BVH in a build without Embree)
         cfg.render.backend = Backend::Embree;
-        let mesh_gb = |cfg: &SceneConfig| memory_needed(cfg, tris, 8, false, BUILT).3 as f64 / 1e9;
+        let mesh_gb = |cfg: &SceneConfig| memory_needed(cfg, tris, 8, false, SHARED).3 as f64 / 1e9;
         cfg.render.spp = 16;
         let grids = mesh_gb(&cfg);
         assert!((0.77..0.85).contains(&grids), "{grids}");
@@ -239,21 +243,23 @@ mod tests {
         let ocean = |cfg: &SceneConfig, at_hand| memory_needed(cfg, 0, 8, false, at_hand).2;
         let gb = ocean_bytes(&cfg) as f64 / 1e9;
         assert!((0.37..0.45).contains(&gb), "{gb}");
-        assert_eq!(ocean(&cfg, BUILT), 0);
+        assert_eq!(ocean(&cfg, SHARED), 0);
         assert_eq!(ocean(&cfg, OceanAtHand::None), ocean_bytes(&cfg));
         // filtered normals' levels add a third of the texels, unless a shared ocean has them
         cfg.render.normals = NormalMode::Filtered;
         let levels = ocean(&cfg, OceanAtHand::None) - ocean_bytes(&cfg);
         assert!(levels as f64 / 1e9 > 0.08, "{levels}");
-        assert_eq!(ocean(&cfg, BUILT), levels);
+        assert_eq!(ocean(&cfg, SHARED), levels);
         assert_eq!(ocean(&cfg, OceanAtHand::Shared { levels: true }), 0);
         assert_eq!(ocean(&cfg, OceanAtHand::Prepared { levels: false }), levels);
+        assert_eq!(ocean(&cfg, OceanAtHand::Prepared { levels: true }), 0);
         // the exact surface's pyramids are every render's own, shared ocean or not
         cfg.render.normals = NormalMode::Mapped;
         cfg.render.surface = SurfaceKind::Exact;
-        let pyramids = ocean(&cfg, BUILT);
+        let pyramids = ocean(&cfg, SHARED);
         assert!(pyramids as f64 / 1e9 > 0.11, "{pyramids}");
         assert_eq!(ocean(&cfg, OceanAtHand::None), ocean_bytes(&cfg) + pyramids);
+        assert_eq!(ocean(&cfg, OceanAtHand::Shared { levels: true }), pyramids);
         assert_eq!(ocean(&cfg, OceanAtHand::Prepared { levels: false }), 0);
         // a 4096-texel layer more: half a gigabyte of texels alone
         cfg.render.surface = SurfaceKind::Mesh;
@@ -265,20 +271,18 @@ mod tests {
     }
 
     #[test]
-    fn the_memory_check_and_the_build_take_the_same_geometry() {
-        // one decision for both: `auto` takes grids for paper-high at 1024 px and 16 spp, and
-        // triangles at 1024 spp, as `grids_for` does with the camera's own sample count
+    fn embree_takes_grids_by_the_cameras_samples_and_never_for_the_exact_surface() {
+        // `auto`: paper-high at 1024 px takes grids at 16 spp (8.4 M camera samples) and
+        // triangles at 1024 spp; the exact surface's coarse triangles are never grids
         let mut cfg = SceneConfig::default();
         cfg.camera.width = 1024;
         cfg.render.spp = 16;
         assert!(embree_grids(&cfg, 22_341_600));
-        assert_eq!(
-            embree_grids(&cfg, 22_341_600),
-            cfg.render
-                .embree_geometry
-                .grids_for(22_341_600, 1024 * 512 * 16)
-        );
         cfg.render.spp = 1024;
         assert!(!embree_grids(&cfg, 22_341_600));
+        cfg.render.embree_geometry = EmbreeGeometry::Grids;
+        assert!(embree_grids(&cfg, 25_520));
+        cfg.render.surface = SurfaceKind::Exact;
+        assert!(!embree_grids(&cfg, 25_520));
     }
 }

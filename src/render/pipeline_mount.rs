@@ -11,7 +11,18 @@ pub(super) fn prepare_mounted(cfg: &SceneConfig, setup: Setup) -> Result<Prepare
     cfg.validate()?;
     let (ocean, seconds_ocean) = match setup.ocean {
         Some(ocean) => (ocean, 0.0),
-        None => tracing_pool(cfg.render.threads)?.install(|| build_ocean(cfg, setup.progress))?,
+        None => {
+            // The ocean is built here, before the camera's place (and so the tessellation) is
+            // known: it is checked alone now, the mesh by `prepare_with` once it is built.
+            check_memory(
+                cfg,
+                0,
+                crate::render::film::MAX_BATCHES,
+                false,
+                OceanAtHand::None,
+            )?;
+            tracing_pool(cfg.render.threads)?.install(|| build_ocean(cfg, setup.progress))?
+        }
     };
     let mut placed = cfg.clone();
     placed.camera = crate::objects::mount::mounted_camera(&cfg.camera, &cfg.objects, &ocean)?;

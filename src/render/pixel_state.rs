@@ -57,7 +57,7 @@ impl PixelState {
         self.add_with_luminance(l, crate::color::luminance(l.to_array()));
     }
 
-    /// [`Self::add`] of `l` whose luminance `y` the caller has computed.
+    /// Adds the sample `l`, whose luminance `y` the caller has computed.
     #[inline]
     pub(super) fn add_with_luminance(&mut self, l: Vec3, y: f32) {
         for k in 0..3 {
