@@ -31,12 +31,12 @@ impl Rng {
     /// A stream keyed by `keys` (e.g. `[seed, pixel, sample]`): different keys give independent
     /// streams, equal keys give the same one.
     pub fn keyed(keys: &[u64]) -> Rng {
-        let state = keys.iter().fold(GOLDEN, |h, &k| mix64(h ^ mix64(k)));
-        Rng { state }
+        keys.iter().fold(Rng { state: GOLDEN }, |r, &k| r.then(k))
     }
 
-    /// The stream keyed by this one's keys and then `key`: `Rng::keyed(&[a, b]).then(c)` is
-    /// `Rng::keyed(&[a, b, c])`, so keys shared by many streams (a pixel's) are hashed once.
+    /// The stream keyed by this one's keys and then `key` (how [`Rng::keyed`] folds them):
+    /// `Rng::keyed(&[a, b]).then(c)` is `Rng::keyed(&[a, b, c])`, so keys shared by many
+    /// streams (a pixel's) are hashed once.
     /// Only for a stream that has not drawn yet (its state is still the keys' hash).
     #[inline]
     pub fn then(&self, key: u64) -> Rng {

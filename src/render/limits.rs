@@ -147,8 +147,7 @@ fn memory_needed(
     keep_states: bool,
     ocean: OceanAtHand,
 ) -> (u64, u64, u64, u64) {
-    let camera = Camera::new(cfg.camera.aimed(), cfg.camera.width, cfg.camera.aspect);
-    let pixels = (camera.width * camera.height) as u64;
+    let pixels = pixels(cfg);
     let film = super::film::film_bytes(pixels, batches, keep_states);
     let ocean = match ocean {
         OceanAtHand::None => ocean_bytes(cfg) + ocean_extra_bytes(cfg, false, false),
@@ -161,11 +160,11 @@ fn memory_needed(
     (pixels, film, ocean, mesh)
 }
 
-/// The camera samples a render of `cfg` traces: its pixels times its samples per pixel.
-fn camera_samples(cfg: &SceneConfig) -> u64 {
+/// The pixels of a render of `cfg`.
+fn pixels(cfg: &SceneConfig) -> u64 {
     let c = &cfg.camera;
     let camera = Camera::new(c.aimed(), c.width, c.aspect);
-    (camera.width * camera.height) as u64 * u64::from(cfg.render.spp)
+    (camera.width * camera.height) as u64
 }
 
 /// Whether Embree takes the `triangles` of a render of `cfg` as grids (its
@@ -177,7 +176,7 @@ pub(super) fn embree_grids(cfg: &SceneConfig, triangles: usize) -> bool {
         && cfg
             .render
             .embree_geometry
-            .grids_for(triangles, camera_samples(cfg))
+            .grids_for(triangles, pixels(cfg) * u64::from(cfg.render.spp))
 }
 
 /// Refuses a render that cannot fit in memory, before anything is allocated (the ocean's share
