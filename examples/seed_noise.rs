@@ -29,26 +29,24 @@ struct Sums {
 /// RMS standard error across the renders, leaving out render `skip` (if any).
 fn across(sums: &Sums, lum: &[Vec<f32>], skip: Option<usize>) -> f64 {
     let n = (lum.len() - skip.is_some() as usize) as f64;
-    let mut total = 0.0;
-    for i in 0..sums.s1.len() {
-        let (mut s1, mut s2) = (sums.s1[i], sums.s2[i]);
-        if let Some(r) = skip {
-            let x = lum[r][i] as f64;
-            s1 -= x;
-            s2 -= x * x;
-        }
-        total += ((s2 - s1 * s1 / n) / (n - 1.0)).max(0.0);
-    }
+    let left_out = |i: usize| skip.map_or(0.0, |r| lum[r][i] as f64);
+    let total: f64 = (sums.s1.iter().zip(&sums.s2).enumerate())
+        .map(|(i, (&s1, &s2))| {
+            let x = left_out(i);
+            let (s1, s2) = (s1 - x, s2 - x * x);
+            ((s2 - s1 * s1 / n) / (n - 1.0)).max(0.0)
+        })
+        .sum();
     (total / sums.s1.len() as f64).sqrt()
 }
 
 /// RMS of the renders' own standard errors (mean `Y.variance`), leaving out render `skip`.
 fn claimed(sums: &Sums, var: &[Vec<f32>], skip: Option<usize>) -> f64 {
     let n = (var.len() - skip.is_some() as usize) as f64;
-    let mut total = 0.0;
-    for i in 0..sums.v.len() {
-        total += sums.v[i] - skip.map_or(0.0, |r| var[r][i] as f64);
-    }
+    let left_out = |i: usize| skip.map_or(0.0, |r| var[r][i] as f64);
+    let total: f64 = (sums.v.iter().enumerate())
+        .map(|(i, &v)| v - left_out(i))
+        .sum();
     (total / (n * sums.v.len() as f64)).sqrt()
 }
 
