@@ -313,9 +313,15 @@ fn the_mapped_lobe_glitter_is_normal_mapping_s() {
 fn a_sky_maps_sun_is_sampled_too() {
     // The same sky rasterized into a 2048-wide map (its disc a few texels): the map's sun is
     // found and sampled, and the glitter is the closed form of those texels.
-    let mut cfg = scene(FilterLobe::Smith, 16);
+    check_under_map(scene(FilterLobe::Smith, 16), "one");
+}
+
+/// [`check`] with the scene's analytic sky rasterized into a 2048-wide map, written to a
+/// folder of the test's own (`name`).
+fn check_under_map(mut cfg: SceneConfig, name: &str) {
     let map = vastocean::sky::rasterize(&cfg.sky.analytic, 2048);
-    let dir = std::env::temp_dir().join(format!("vastocean-far-field-{}", std::process::id()));
+    let dir =
+        std::env::temp_dir().join(format!("vastocean-far-field-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("sun.exr");
     vastocean::image_io::write_exr(&path, &map).unwrap();
@@ -346,4 +352,20 @@ fn the_mapped_lobe_glitter_near_the_horizon_under_terminate() {
         *pitch_deg = -33.0;
     }
     check(&cfg);
+}
+
+#[test]
+fn several_sun_samples_on_a_lattice_give_the_same_glitter() {
+    // Each rough hit samples the sun's disc `sun_samples` times on a rotated lattice and traces
+    // one shadow ray among them, chosen by weight; the multiple-importance weights count the
+    // samples. Both lobes, with counts that are not the lattice's powers of two, and the map's
+    // sun, whose lattice runs over its texels instead of a cone: the glitter keeps its closed form.
+    for (lobe, k) in [(FilterLobe::Smith, 3), (FilterLobe::Mapped, 5)] {
+        let mut cfg = scene(lobe, 16);
+        cfg.render.sun_samples = k;
+        check(&cfg);
+    }
+    let mut cfg = scene(FilterLobe::Smith, 16);
+    cfg.render.sun_samples = 6;
+    check_under_map(cfg, "several");
 }

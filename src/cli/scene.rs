@@ -241,6 +241,10 @@ pub struct RenderArgs {
     /// image, less noise), `smith` is the microfacet model with Smith's masking.
     #[arg(long, value_parser = choice::<vastocean::config::FilterLobe>())]
     filter_lobe: Option<vastocean::config::FilterLobe>,
+    /// Filtered normals: the sun's samples at each rough hit, spread evenly over its disc with
+    /// one shadow ray among them (1 to 16; more = less noise in the glitter, at a cost).
+    #[arg(long)]
+    sun_samples: Option<u32>,
     /// Render only the elevations TOP:BOTTOM in degrees, e.g. +1:-6 (equirectangular camera).
     #[arg(long, value_parser = parse_band, allow_hyphen_values = true)]
     band: Option<(f64, f64)>,
@@ -322,6 +326,7 @@ impl RenderArgs {
         cfg.render.normals = self.normals.unwrap_or(cfg.render.normals);
         cfg.render.filter_width = self.filter_width.unwrap_or(cfg.render.filter_width);
         cfg.render.filter_lobe = self.filter_lobe.unwrap_or(cfg.render.filter_lobe);
+        cfg.render.sun_samples = self.sun_samples.unwrap_or(cfg.render.sun_samples);
         if let Some(aovs) = &self.aov {
             cfg.render.aovs = aovs.clone();
         }

@@ -319,6 +319,13 @@ impl SceneConfig {
                 r.filter_width,
             ));
         }
+        if !(1..=crate::render::MAX_SUN_SAMPLES).contains(&r.sun_samples) {
+            return Err(invalid(
+                "render.sun_samples",
+                &format!("in 1..={}", crate::render::MAX_SUN_SAMPLES),
+                r.sun_samples,
+            ));
+        }
         if let Some(e) = r.exposure
             && !(e.is_finite() && e.abs() <= render::MAX_EXPOSURE_STOPS)
         {
@@ -516,6 +523,13 @@ mod tests {
                 .to_string()
                 .starts_with("render.spp")
         );
+        for k in [0, 17] {
+            let c: SceneConfig = toml::from_str(&format!("[render]\nsun_samples = {k}\n")).unwrap();
+            assert_eq!(
+                c.validate().unwrap_err().to_string(),
+                format!("render.sun_samples must be in 1..=16 (got {k})")
+            );
+        }
         let c: SceneConfig = toml::from_str("[lod]\npreset = \"custom\"\n").unwrap();
         assert!(
             c.validate()

@@ -25,8 +25,10 @@ use super::microfacet::{Lobe, power_heuristic};
 use super::normals::Unresolved;
 use super::water::{fresnel, reflect, refract};
 use crate::accel::{Hit, Ray};
+use crate::color::luminance;
 use crate::config::{FilterLobe, WrongSide};
 use crate::rng::Rng;
+use crate::sky::SunLight;
 
 /// What one hit does to a path: where it is, which way the medium changes, the attenuation of
 /// the segment that reached it, and the two directions leaving it with their weights.
@@ -264,22 +266,11 @@ impl SceneRef<'_> {
                 (p, f)
             }
         };
+        let k = settings.sun_samples;
         if let Some(r) = unmodified.filter(|&r| sun.near(r)) {
-            s.sun_pdf = at(r).0;
+            s.sun_pdf = at(r).0 / k as f32;
         }
-        c.sun_samples += 1;
-        let sample = sun.sample(s.sp.p, rng.f32(), rng.f32());
-        if sample.pdf == 0.0 {
-            return;
-        }
-        let (p_bsdf, f_cos) = at(sample.d);
-        if f_cos > 0.0 {
-            let weight = power_heuristic(sample.pdf, p_bsdf);
-            let light = sun.radiance(&sample) * (f_cos * weight / sample.pdf);
-            if light != Vec3::ZERO {
-                s.sun = Some((s.sp.spawn(sample.d), light));
-            }
-        }
+        s.sun = sample_sun(sun, s.sp, k, rng, c, at);
     }
 
     /// The `smith` lobe around the shading normal: a visible microfacet normal, the split about
@@ -359,23 +350,18 @@ impl SceneRef<'_> {
             }
         };
         // (Only a reflection that may meet the sun needs its density.)
+        let k = settings.sun_samples;
         if let Some(w) = s.reflected.filter(|&w| sun.near(w)) {
-            s.sun_pdf = folded_at(w).0;
+            s.sun_pdf = folded_at(w).0 / k as f32;
         }
-        c.sun_samples += 1;
-        let sample = sun.sample(s.sp.p, rng.f32(), rng.f32());
-        let (ws, p_sun) = (sample.d, sample.pdf);
-        if ws.dot(ng) <= 0.0 || p_sun == 0.0 {
-            return;
-        }
-        let (p_bsdf, f_cos) = folded_at(ws);
-        if f_cos > 0.0 {
-            let weight = power_heuristic(p_sun, p_bsdf);
-            let light = sun.radiance(&sample) * (f_cos * weight / p_sun);
-            if light != Vec3::ZERO {
-                s.sun = Some((s.sp.spawn(ws), light));
+        let above = |w: Vec3| {
+            if w.dot(ng) <= 0.0 {
+                (0.0, 0.0)
+            } else {
+                folded_at(w)
             }
-        }
+        };
+        s.sun = sample_sun(sun, s.sp, k, rng, c, above);
     }
 
     /// The radiance `l` a ray from `org` along `d` brings from the sky, with the sun's part
@@ -393,6 +379,98 @@ impl SceneRef<'_> {
             _ => l,
         }
     }
+}
+
+/// Most sun samples a rough hit may take (`render.sun_samples`).
+pub const MAX_SUN_SAMPLES: u32 = 16;
+
+/// i / golden ratio, modulo 1, for i < [`MAX_SUN_SAMPLES`]: the sun's lattice across its second
+/// dimension.
+const GOLDEN_STEPS: [f32; MAX_SUN_SAMPLES as usize] = {
+    let mut steps = [0.0f32; MAX_SUN_SAMPLES as usize];
+    let mut i = 0;
+    while i < steps.len() {
+        let x = i as f64 * 0.618_033_988_749_894_8;
+        steps[i] = (x - (x as u64) as f64) as f32;
+        i += 1;
+    }
+    steps
+};
+
+/// Next-event estimation of the sun at a rough hit at `sp`, `bsdf(w)` giving the reflection's
+/// (density, BSDF x cosine) towards direction w: the sun's direct light, and the shadow ray
+/// that must reach the sky for it to count.
+///
+/// `k` directions over the sun's cone, on a rank-1 lattice (i / k, i / golden ratio) rotated
+/// by one random pair (Cranley-Patterson), so each is uniform on its own and together they
+/// cover the disc evenly. Each is weighted by the power heuristic against the BSDF's own
+/// sample, counting the k sun samples: the BSDF's sample then sees the weight
+/// p_bsdf^2 / (p_bsdf^2 + k^2 p_sun^2), for which the caller stores its density over k
+/// (`Scatter::sun_pdf`). One of them carries the shadow ray, chosen in proportion to its
+/// contribution (its weight times the luminance of its radiance where sampling knew it, a
+/// map's sun; the analytic disc is uniform), and the contribution of all of them over its own:
+/// resampled importance, unbiased for any choice in proportion to positive numbers, one shadow
+/// ray however many samples. With `k` = 1, the one sample as it always was: the same random
+/// numbers, the same bits.
+fn sample_sun(
+    sun: &SunLight,
+    sp: SurfacePoint,
+    k: u32,
+    rng: &mut Rng,
+    c: &mut Counters,
+    bsdf: impl Fn(Vec3) -> (f32, f32),
+) -> Option<(Ray, Vec3)> {
+    c.sun_samples += u64::from(k);
+    let (o1, o2) = (rng.f32(), rng.f32());
+    let kf = k as f32;
+    // x in [0, 2) wrapped into [0, 1) (`fract` is a libm call)
+    let wrap = |x: f32| if x >= 1.0 { x - 1.0 } else { x };
+    // (sample, its weight f cos w / p, the choice's measure of it) of the samples that count
+    let mut kept = [(None, 0.0f32, 0.0f32); MAX_SUN_SAMPLES as usize];
+    let (mut n, mut total) = (0, 0.0f32);
+    for i in 0..k.min(MAX_SUN_SAMPLES) {
+        let fi = i as f32;
+        let (u1, u2) = (wrap(o1 + fi / kf), wrap(o2 + GOLDEN_STEPS[i as usize]));
+        let sample = sun.sample(sp.p, u1, u2);
+        if sample.pdf == 0.0 {
+            continue;
+        }
+        let (p_bsdf, f_cos) = bsdf(sample.d);
+        if f_cos > 0.0 {
+            let w = f_cos * power_heuristic(kf * sample.pdf, p_bsdf) / sample.pdf;
+            let measure = w * sample
+                .known_radiance()
+                .map_or(1.0, |l| luminance(l.to_array()));
+            if measure > 0.0 {
+                kept[n] = (Some(sample), w, measure);
+                n += 1;
+                total += measure;
+            }
+        }
+    }
+    if n == 0 {
+        return None;
+    }
+    let chosen = if n == 1 {
+        0
+    } else {
+        // the first whose running sum passes u x total (the last, should rounding leave none)
+        let target = rng.f32() * total;
+        let mut sum = 0.0;
+        kept[..n]
+            .iter()
+            .position(|&(_, _, m)| {
+                sum += m;
+                sum > target
+            })
+            .unwrap_or(n - 1)
+    };
+    let (Some(sample), w, measure) = kept[chosen] else {
+        unreachable!("kept samples are Some")
+    };
+    // (alone, total / (measure k) is exactly 1: the one sample's weight, bit for bit)
+    let light = sun.radiance(&sample) * (w * (total / (measure * kf)));
+    (light != Vec3::ZERO).then(|| (sp.spawn(sample.d), light))
 }
 
 /// A branch leaving a hit: its direction, whether it travels in the water, its weight besides

@@ -62,6 +62,8 @@ pub struct TraceSettings {
     pub filter_width: f32,
     /// Filtered normals: the lobe of the unresolved waves (`render.filter_lobe`).
     pub filter_lobe: FilterLobe,
+    /// Rough hits: the sun's samples each takes (`render.sun_samples`).
+    pub sun_samples: u32,
 }
 
 impl Default for TraceSettings {
@@ -85,6 +87,7 @@ impl TraceSettings {
             pixel_spread_rad: 0.0,
             filter_width: scene.render.filter_width,
             filter_lobe: scene.render.filter_lobe,
+            sun_samples: scene.render.sun_samples,
         }
     }
 }

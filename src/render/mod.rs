@@ -26,6 +26,7 @@ pub mod water;
 
 pub use crate::config::{NormalMode, Projection, Water};
 pub use crate::sky::{AnalyticSky, Sky};
+pub use bsdf::MAX_SUN_SAMPLES;
 pub use camera::Camera;
 pub use film::{render_image, render_image_samples};
 pub use integrator::{Counters, SceneRef, TraceSettings};

@@ -41,6 +41,15 @@ pub struct SunSample {
     known: Option<Vec3>,
 }
 
+impl SunSample {
+    /// The sun's radiance along the sample where sampling needed it (a map's sun, whose
+    /// density follows its radiance), `None` for the analytic disc, which is uniform but for
+    /// the sky's smooth part beneath it.
+    pub fn known_radiance(&self) -> Option<Vec3> {
+        self.known
+    }
+}
+
 /// The sun's part of the sky's radiance, and how it is sampled.
 #[derive(Clone, Debug)]
 enum Part {
