@@ -126,8 +126,9 @@ pub struct RenderConfig {
     pub filter_width: f32,
     /// Filtered normals: the lobe of the waves below the footprint.
     pub filter_lobe: FilterLobe,
-    /// Filtered normals: the sun's samples at each rough hit seen from the air, spread evenly
-    /// over its disc, one shadow ray among them (docs/filtered.md, "The sun's samples").
+    /// Filtered normals: the sun's samples at a rough hit seen from the air whose lobe may
+    /// reflect the sun (one elsewhere), spread evenly over its disc, one shadow ray among them
+    /// (docs/filtered.md, "The sun's samples").
     pub sun_samples: u32,
     /// Most segments (rays) in one path (the paper: 10).
     pub max_segments: u32,
@@ -283,7 +284,7 @@ impl Default for RenderConfig {
             normals: NormalMode::Mapped,
             filter_width: FILTER_WIDTH_BOX,
             filter_lobe: FilterLobe::Mapped,
-            sun_samples: 2,
+            sun_samples: 8,
             max_segments: 10,
             branch_depth: 3,
             backend: Backend::default(),

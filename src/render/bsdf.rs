@@ -266,7 +266,10 @@ impl SceneRef<'_> {
                 (p, f)
             }
         };
-        let k = settings.sun_samples;
+        let k = sun_samples_here(sun, settings, s.sp.p, |w| {
+            lobe.may_reflect(wo, w, sun.reach_rad())
+                || (folds && lobe.may_reflect(wo, w - 2.0 * ng.dot(w) * ng, sun.reach_rad()))
+        });
         if let Some(r) = unmodified.filter(|&r| sun.near(r)) {
             s.sun_pdf = at(r).0 / k as f32;
         }
@@ -350,7 +353,10 @@ impl SceneRef<'_> {
             }
         };
         // (Only a reflection that may meet the sun needs its density.)
-        let k = settings.sun_samples;
+        let k = sun_samples_here(sun, settings, s.sp.p, |w| {
+            lobe.may_reflect(-d, w, sun.reach_rad())
+                || (folds && lobe.may_reflect(-d, mirror(w), sun.reach_rad()))
+        });
         if let Some(w) = s.reflected.filter(|&w| sun.near(w)) {
             s.sun_pdf = folded_at(w).0 / k as f32;
         }
@@ -396,6 +402,24 @@ const GOLDEN_STEPS: [f32; MAX_SUN_SAMPLES as usize] = {
     }
     steps
 };
+
+/// The sun's samples a rough hit at `p` takes: `render.sun_samples` where its lobe may reflect
+/// the sun (`may_reflect`, asked of the sun's centre as `p` sees it), one elsewhere, where more
+/// would only find a density too small to matter. Each hit's estimate is unbiased for any
+/// count, so the choice moves only the effort: most rough hits lie outside the sun's glitter.
+fn sun_samples_here(
+    sun: &SunLight,
+    settings: &TraceSettings,
+    p: Vec3,
+    may_reflect: impl Fn(Vec3) -> bool,
+) -> u32 {
+    let k = settings.sun_samples;
+    if k > 1 && may_reflect(sun.centre_from(p)) {
+        k
+    } else {
+        1
+    }
+}
 
 /// Next-event estimation of the sun at a rough hit at `sp`, `bsdf(w)` giving the reflection's
 /// (density, BSDF x cosine) towards direction w: the sun's direct light, and the shadow ray

@@ -89,6 +89,8 @@ pub struct SunLight {
     dir: Vec3,
     /// The cosine of the widest angle from `dir` at which a direction may see the sun.
     near_cos: f32,
+    /// How far from `dir` the camera may see the sun: the disc's radius, or a map's window.
+    reach_rad: f32,
     part: Part,
     scale: f32,
     /// Earth radius, camera height and dome altitude, m, when the sky is on a dome.
@@ -129,6 +131,7 @@ impl Sky {
         Some(SunLight {
             dir,
             near_cos: (reach + PARALLAX_RAD).min(std::f32::consts::PI).cos(),
+            reach_rad: reach,
             part,
             scale: self.scale,
             dome: self
@@ -142,6 +145,25 @@ impl SunLight {
     /// The sun's centre as the camera sees it.
     pub fn direction(&self) -> Vec3 {
         self.dir
+    }
+
+    /// How far from [`Self::direction`] the camera may see the sun, radians: the disc's radius
+    /// (a hair more), or a map's window.
+    pub fn reach_rad(&self) -> f32 {
+        self.reach_rad
+    }
+
+    /// The sun's centre seen from `org`: where the camera sees it, moved by the dome's
+    /// parallax when the sky is on a dome.
+    pub fn centre_from(&self, org: Vec3) -> Vec3 {
+        match self.dome {
+            Some((r, h, alt)) if !at_camera(org, h) => {
+                let camera = Vec3::new(0.0, h as f32, 0.0);
+                let q = dome_offset(r, h, alt, camera, self.dir);
+                (q - Vec3::new(org.x, org.y - h as f32, org.z)).normalize()
+            }
+            _ => self.dir,
+        }
     }
 
     /// A camera direction towards the sun from two uniform numbers.
