@@ -279,3 +279,74 @@ fn a_lobe_around_the_vertical_adds_its_slopes_to_the_resolved_normals() {
         );
     }
 }
+
+/// The exponent of the lobe's density at the half vector of `wo` and `w` (world): the density
+/// is e^-exponent times its peak's (up to the cos^4 of the half vector's tilt).
+fn exponent(lobe: &Lobe, wo: Vec3, w: Vec3) -> f32 {
+    let (h, _) = lobe.local((wo + w).normalize());
+    let sx = (-h.x / h.z - lobe.mean[0]) / lobe.alpha[0];
+    let sy = (-h.y / h.z - lobe.mean[1]) / lobe.alpha[1];
+    sx * sx + sy * sy
+}
+
+#[test]
+fn the_sun_question_holds_every_direction_the_lobe_reflects_into_the_disc() {
+    // Lobes from a thousandth to a third in slope, around the vertical with a resolved tilt or
+    // around their own normal, seen from 0.5 to 60 degrees up; a disc of the sun's radius
+    // around a direction near each lobe's mirror direction, or anywhere. Wherever some
+    // direction of the disc meets the lobe above e^-9 of its peak, the question says yes; and
+    // it says no to most discs far off the lobe (it saves work).
+    let reach = 4.65e-3f32;
+    let mut rng = Rng::keyed(&[17]);
+    let (mut near, mut refused, mut far) = (0, 0, 0);
+    for i in 0..4000 {
+        let sigma = 1e-3 * 300f32.powf(rng.f32());
+        let cov = [
+            sigma * sigma,
+            0.3 * sigma * sigma * (rng.f32() - 0.5),
+            0.2 * sigma * sigma,
+        ];
+        let tilt = Vec3::new(0.1 * (rng.f32() - 0.5), 1.0, 0.1 * (rng.f32() - 0.5)).normalize();
+        let lobe = if i % 2 == 0 {
+            Lobe::around(Vec3::Y, tilt, cov)
+        } else {
+            Lobe::new(tilt, cov)
+        }
+        .unwrap();
+        let el = (0.5 + 59.5 * rng.f32()).to_radians();
+        let az = std::f32::consts::TAU * rng.f32();
+        let wo = Vec3::new(el.cos() * az.cos(), el.sin(), el.cos() * az.sin());
+        // the disc's centre: the mirror direction about a normal of the lobe, or anywhere above
+        let centre = if i % 4 < 2 {
+            let m = lobe.world(lobe.sample_area(rng.f32(), rng.f32()), false);
+            (2.0 * wo.dot(m) * m - wo).normalize()
+        } else {
+            let (e, a) = (1.5 * rng.f32(), std::f32::consts::TAU * rng.f32());
+            Vec3::new(e.cos() * a.cos(), e.sin(), e.cos() * a.sin())
+        };
+        if centre.y <= 0.0 {
+            continue;
+        }
+        let says = lobe.may_reflect(wo, centre, reach);
+        let u = Vec3::Y.cross(centre).normalize();
+        let v = centre.cross(u);
+        let meets = (0..256).any(|j| {
+            let (r, a) = (reach * (j as f32 / 255.0).sqrt(), 2.4 * j as f32);
+            let w = (centre + r * (a.cos() * u + a.sin() * v)).normalize();
+            exponent(&lobe, wo, w) < 9.0
+        });
+        if meets {
+            near += 1;
+            assert!(says, "lobe {lobe:?}, wo {wo}, centre {centre}");
+        } else if says {
+            far += 1;
+        } else {
+            refused += 1;
+        }
+    }
+    assert!(near > 500, "{near} discs met their lobe");
+    assert!(
+        refused > 5 * far,
+        "{refused} discs refused, {far} let through needlessly"
+    );
+}
