@@ -313,7 +313,9 @@ fn the_mapped_lobe_glitter_is_normal_mapping_s() {
 fn a_sky_maps_sun_is_sampled_too() {
     // The same sky rasterized into a 2048-wide map (its disc a few texels): the map's sun is
     // found and sampled, and the glitter is the closed form of those texels.
-    check_under_map(scene(FilterLobe::Smith, 16), "one");
+    let mut cfg = scene(FilterLobe::Smith, 16);
+    cfg.render.sun_samples = 1;
+    check_under_map(cfg, "one");
 }
 
 /// [`check`] with the scene's analytic sky rasterized into a 2048-wide map, written to a
@@ -356,11 +358,17 @@ fn the_mapped_lobe_glitter_near_the_horizon_under_terminate() {
 
 #[test]
 fn several_sun_samples_on_a_lattice_give_the_same_glitter() {
-    // Each rough hit samples the sun's disc `sun_samples` times on a rotated lattice and traces
-    // one shadow ray among them, chosen by weight; the multiple-importance weights count the
-    // samples. Both lobes, with counts that are not the lattice's powers of two, and the map's
-    // sun, whose lattice runs over its texels instead of a cone: the glitter keeps its closed form.
-    for (lobe, k) in [(FilterLobe::Smith, 3), (FilterLobe::Mapped, 5)] {
+    // A rough hit whose lobe may reflect the sun samples its disc `sun_samples` times and traces
+    // one shadow ray among them, chosen by contribution; the multiple-importance weights count
+    // the samples. Both lobes with one sample and with counts that are not powers of two, and
+    // the map's sun, whose points run over its texels instead of a cone: the glitter keeps its
+    // closed form.
+    for (lobe, k) in [
+        (FilterLobe::Smith, 1),
+        (FilterLobe::Smith, 3),
+        (FilterLobe::Mapped, 1),
+        (FilterLobe::Mapped, 5),
+    ] {
         let mut cfg = scene(lobe, 16);
         cfg.render.sun_samples = k;
         check(&cfg);

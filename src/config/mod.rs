@@ -523,6 +523,10 @@ mod tests {
                 .to_string()
                 .starts_with("render.spp")
         );
+        for k in [1, 16] {
+            let c: SceneConfig = toml::from_str(&format!("[render]\nsun_samples = {k}\n")).unwrap();
+            assert!(c.validate().is_ok(), "{k} sun samples");
+        }
         for k in [0, 17] {
             let c: SceneConfig = toml::from_str(&format!("[render]\nsun_samples = {k}\n")).unwrap();
             assert_eq!(

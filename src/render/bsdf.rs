@@ -270,10 +270,8 @@ impl SceneRef<'_> {
             lobe.may_reflect(wo, w, sun.reach_rad())
                 || (folds && lobe.may_reflect(wo, w - 2.0 * ng.dot(w) * ng, sun.reach_rad()))
         });
-        if let Some(r) = unmodified.filter(|&r| sun.near(r)) {
-            s.sun_pdf = at(r).0 / k as f32;
-        }
-        s.sun = sample_sun(sun, s.sp, k, rng, c, at);
+        let reflected = unmodified.filter(|&r| sun.near(r)).map(|r| at(r).0);
+        (s.sun, s.sun_pdf) = sample_sun(sun, s.sp, k, reflected, rng, c, at);
     }
 
     /// The `smith` lobe around the shading normal: a visible microfacet normal, the split about
@@ -357,9 +355,7 @@ impl SceneRef<'_> {
             lobe.may_reflect(-d, w, sun.reach_rad())
                 || (folds && lobe.may_reflect(-d, mirror(w), sun.reach_rad()))
         });
-        if let Some(w) = s.reflected.filter(|&w| sun.near(w)) {
-            s.sun_pdf = folded_at(w).0 / k as f32;
-        }
+        let reflected = s.reflected.filter(|&w| sun.near(w)).map(|w| folded_at(w).0);
         let above = |w: Vec3| {
             if w.dot(ng) <= 0.0 {
                 (0.0, 0.0)
@@ -367,7 +363,7 @@ impl SceneRef<'_> {
                 folded_at(w)
             }
         };
-        s.sun = sample_sun(sun, s.sp, k, rng, c, above);
+        (s.sun, s.sun_pdf) = sample_sun(sun, s.sp, k, reflected, rng, c, above);
     }
 
     /// The radiance `l` a ray from `org` along `d` brings from the sky, with the sun's part
@@ -390,8 +386,8 @@ impl SceneRef<'_> {
 /// Most sun samples a rough hit may take (`render.sun_samples`).
 pub const MAX_SUN_SAMPLES: u32 = 16;
 
-/// i / golden ratio, modulo 1, for i < [`MAX_SUN_SAMPLES`]: the sun's lattice across its second
-/// dimension.
+/// i / golden ratio, modulo 1, for i < [`MAX_SUN_SAMPLES`]: the second coordinate of the sun's
+/// points.
 const GOLDEN_STEPS: [f32; MAX_SUN_SAMPLES as usize] = {
     let mut steps = [0.0f32; MAX_SUN_SAMPLES as usize];
     let mut i = 0;
@@ -413,7 +409,8 @@ fn sun_samples_here(
     p: Vec3,
     may_reflect: impl Fn(Vec3) -> bool,
 ) -> u32 {
-    let k = settings.sun_samples;
+    // (a scene that skipped validation still gets a count the samples can hold)
+    let k = settings.sun_samples.clamp(1, MAX_SUN_SAMPLES);
     if k > 1 && may_reflect(sun.centre_from(p)) {
         k
     } else {
@@ -422,28 +419,32 @@ fn sun_samples_here(
 }
 
 /// Next-event estimation of the sun at a rough hit at `sp`, `bsdf(w)` giving the reflection's
-/// (density, BSDF x cosine) towards direction w: the sun's direct light, and the shadow ray
-/// that must reach the sky for it to count.
+/// (density, BSDF x cosine) towards direction w: the sun's direct light with the shadow ray
+/// that must reach the sky for it to count, and the density the hit's reflected ray carries
+/// for the sun it may find (`Scatter::sun_pdf`), from that ray's own density
+/// `reflected_density` (`None`: it cannot find the sun, and carries 0, full weight).
 ///
-/// `k` directions over the sun's cone, on a rank-1 lattice (i / k, i / golden ratio) rotated
-/// by one random pair (Cranley-Patterson), so each is uniform on its own and together they
-/// cover the disc evenly. Each is weighted by the power heuristic against the BSDF's own
-/// sample, counting the k sun samples: the BSDF's sample then sees the weight
-/// p_bsdf^2 / (p_bsdf^2 + k^2 p_sun^2), for which the caller stores its density over k
-/// (`Scatter::sun_pdf`). One of them carries the shadow ray, chosen in proportion to its
-/// contribution (its weight times the luminance of its radiance where sampling knew it, a
-/// map's sun; the analytic disc is uniform), and the contribution of all of them over its own:
-/// resampled importance, unbiased for any choice in proportion to positive numbers, one shadow
-/// ray however many samples. With `k` = 1, the one sample as it always was: the same random
-/// numbers, the same bits.
+/// `k` directions over the sun's cone, the points (i / k, i / golden ratio modulo 1) rotated
+/// by one random pair (Cranley-Patterson): each is uniform on its own, and together they are
+/// stratified along the first coordinate and spread along the second, covering the disc
+/// evenly. Each is weighted by the power heuristic against the BSDF's own sample, counting the
+/// k sun samples: the BSDF's sample then sees the weight p_bsdf^2 / (p_bsdf^2 + k^2 p_sun^2),
+/// for which its density is handed back over k. One of them carries
+/// the shadow ray, chosen in proportion to its contribution (its weight times the luminance of
+/// its radiance where sampling knew it, a map's sun; the analytic disc is uniform), and the
+/// contribution of all of them over its own: resampled importance, unbiased for any choice in
+/// proportion to positive numbers, one shadow ray however many samples. With `k` = 1, one
+/// sample from the first two random numbers, its weight unscaled.
 fn sample_sun(
     sun: &SunLight,
     sp: SurfacePoint,
     k: u32,
+    reflected_density: Option<f32>,
     rng: &mut Rng,
     c: &mut Counters,
     bsdf: impl Fn(Vec3) -> (f32, f32),
-) -> Option<(Ray, Vec3)> {
+) -> (Option<(Ray, Vec3)>, f32) {
+    debug_assert!((1..=MAX_SUN_SAMPLES).contains(&k), "{k} sun samples");
     c.sun_samples += u64::from(k);
     let (o1, o2) = (rng.f32(), rng.f32());
     let kf = k as f32;
@@ -452,7 +453,7 @@ fn sample_sun(
     // (sample, its weight f cos w / p, the choice's measure of it) of the samples that count
     let mut kept = [(None, 0.0f32, 0.0f32); MAX_SUN_SAMPLES as usize];
     let (mut n, mut total) = (0, 0.0f32);
-    for i in 0..k.min(MAX_SUN_SAMPLES) {
+    for i in 0..k {
         let fi = i as f32;
         let (u1, u2) = (wrap(o1 + fi / kf), wrap(o2 + GOLDEN_STEPS[i as usize]));
         let sample = sun.sample(sp.p, u1, u2);
@@ -472,8 +473,9 @@ fn sample_sun(
             }
         }
     }
+    let reflected_pdf = reflected_density.map_or(0.0, |p| p / kf);
     if n == 0 {
-        return None;
+        return (None, reflected_pdf);
     }
     let chosen = if n == 1 {
         0
@@ -492,9 +494,10 @@ fn sample_sun(
     let (Some(sample), w, measure) = kept[chosen] else {
         unreachable!("kept samples are Some")
     };
-    // (alone, total / (measure k) is exactly 1: the one sample's weight, bit for bit)
+    // (with k = 1, total / measure is exactly 1: the one sample's weight, bit for bit)
     let light = sun.radiance(&sample) * (w * (total / (measure * kf)));
-    (light != Vec3::ZERO).then(|| (sp.spawn(sample.d), light))
+    let light = (light != Vec3::ZERO).then(|| (sp.spawn(sample.d), light));
+    (light, reflected_pdf)
 }
 
 /// A branch leaving a hit: its direction, whether it travels in the water, its weight besides
@@ -529,3 +532,7 @@ pub(super) fn branches(
         }
     }
 }
+
+#[cfg(test)]
+#[path = "bsdf_tests.rs"]
+mod tests;

@@ -129,15 +129,22 @@ impl Lobe {
 
     /// Whether the lobe's normals may reflect world direction `wo` into some direction within
     /// `reach` radians of world direction `w`: the half vector's slopes, less the reach as it
-    /// moves them (half its angle over cos^2 of the half vector's tilt, taken at twice that),
-    /// within three roughnesses of the lobe's centre (a density above e^-9 of its peak). A
-    /// question of effort, not of the estimate: how many samples to spend there.
+    /// moves them, within three roughnesses of the lobe's centre (a density above e^-9 of its
+    /// peak). Moving w by an angle moves the half vector by up to that over |wo + w| (half of it
+    /// at normal incidence, more at grazing), and its slope by that over cos^2 of its tilt;
+    /// the reach is taken at twice that. A question of effort, not of the estimate: how many
+    /// samples to spend there.
     pub fn may_reflect(&self, wo: Vec3, w: Vec3, reach: f32) -> bool {
-        let (h, below) = self.local((wo + w).normalize_or_zero());
+        let sum = wo + w;
+        let len = sum.length();
+        if len <= 1e-3 {
+            return true;
+        }
+        let (h, below) = self.local(sum / len);
         if below || h.z <= 1e-3 {
             return true;
         }
-        let r = reach / (h.z * h.z);
+        let r = 2.0 * reach / (len * h.z * h.z);
         let sx = ((-h.x / h.z - self.mean[0]).abs() - r).max(0.0) / self.alpha[0];
         let sy = ((-h.y / h.z - self.mean[1]).abs() - r).max(0.0) / self.alpha[1];
         sx * sx + sy * sy < 9.0
