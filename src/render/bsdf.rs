@@ -266,10 +266,7 @@ impl SceneRef<'_> {
                 (p, f)
             }
         };
-        let k = sun_samples_here(sun, settings, s.sp.p, |w| {
-            lobe.may_reflect(wo, w, sun.reach_rad())
-                || (folds && lobe.may_reflect(wo, w - 2.0 * ng.dot(w) * ng, sun.reach_rad()))
-        });
+        let k = sun_samples_here(sun, settings, s.sp.p, lobe, wo, folds.then_some(ng));
         let reflected = unmodified.filter(|&r| sun.near(r)).map(|r| at(r).0);
         (s.sun, s.sun_pdf) = sample_sun(sun, s.sp, k, reflected, rng, c, at);
     }
@@ -351,10 +348,7 @@ impl SceneRef<'_> {
             }
         };
         // (Only a reflection that may meet the sun needs its density.)
-        let k = sun_samples_here(sun, settings, s.sp.p, |w| {
-            lobe.may_reflect(-d, w, sun.reach_rad())
-                || (folds && lobe.may_reflect(-d, mirror(w), sun.reach_rad()))
-        });
+        let k = sun_samples_here(sun, settings, s.sp.p, lobe, -d, folds.then_some(ng));
         let reflected = s.reflected.filter(|&w| sun.near(w)).map(|w| folded_at(w).0);
         let above = |w: Vec3| {
             if w.dot(ng) <= 0.0 {
@@ -399,23 +393,29 @@ const GOLDEN_STEPS: [f32; MAX_SUN_SAMPLES as usize] = {
     steps
 };
 
-/// The sun's samples a rough hit at `p` takes: `render.sun_samples` where its lobe may reflect
-/// the sun (`may_reflect`, asked of the sun's centre as `p` sees it), one elsewhere, where more
-/// would only find a density too small to matter. Each hit's estimate is unbiased for any
-/// count, so the choice moves only the effort: most rough hits lie outside the sun's glitter.
+/// The sun's samples a rough hit at `p` viewed along `wo` takes: `render.sun_samples` where
+/// `lobe` may reflect the sun ([`Lobe::may_reflect`], asked of the sun's centre as `p` sees it,
+/// and of its mirror image about `fold`, the geometric normal, where the wrong-side policy
+/// folds the lobe), one elsewhere, where more would only find a density too small to matter.
+/// Each hit's estimate is unbiased for any count, so the choice moves only the effort: most
+/// rough hits lie outside the sun's glitter.
 fn sun_samples_here(
     sun: &SunLight,
     settings: &TraceSettings,
     p: Vec3,
-    may_reflect: impl Fn(Vec3) -> bool,
+    lobe: &Lobe,
+    wo: Vec3,
+    fold: Option<Vec3>,
 ) -> u32 {
     // (a scene that skipped validation still gets a count the samples can hold)
     let k = settings.sun_samples.clamp(1, MAX_SUN_SAMPLES);
-    if k > 1 && may_reflect(sun.centre_from(p)) {
-        k
-    } else {
-        1
+    if k == 1 {
+        return 1;
     }
+    let (centre, reach) = (sun.centre_from(p), sun.reach_rad());
+    let may = lobe.may_reflect(wo, centre, reach)
+        || fold.is_some_and(|ng| lobe.may_reflect(wo, centre - 2.0 * ng.dot(centre) * ng, reach));
+    if may { k } else { 1 }
 }
 
 /// Next-event estimation of the sun at a rough hit at `sp`, `bsdf(w)` giving the reflection's
