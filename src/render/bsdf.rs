@@ -267,7 +267,9 @@ impl SceneRef<'_> {
             }
         };
         let k = sun_samples_here(sun, settings, s.sp.p, lobe, wo, folds.then_some(ng));
-        let reflected = unmodified.filter(|&r| sun.near(r)).map(|r| at(r).0);
+        let reflected = unmodified
+            .filter(|&r| k > 0 && sun.near(r))
+            .map(|r| at(r).0);
         (s.sun, s.sun_pdf) = sample_sun(sun, s.sp, k, reflected, rng, c, at);
     }
 
@@ -349,7 +351,10 @@ impl SceneRef<'_> {
         };
         // (Only a reflection that may meet the sun needs its density.)
         let k = sun_samples_here(sun, settings, s.sp.p, lobe, -d, folds.then_some(ng));
-        let reflected = s.reflected.filter(|&w| sun.near(w)).map(|w| folded_at(w).0);
+        let reflected = s
+            .reflected
+            .filter(|&w| k > 0 && sun.near(w))
+            .map(|w| folded_at(w).0);
         let above = |w: Vec3| {
             if w.dot(ng) <= 0.0 {
                 (0.0, 0.0)
@@ -393,12 +398,24 @@ const GOLDEN_STEPS: [f32; MAX_SUN_SAMPLES as usize] = {
     steps
 };
 
+/// Where a lobe reflects the sun above e^-9 of its peak density, a rough hit takes
+/// `render.sun_samples` of it; the rest of the glitter's edge is a question of effort only.
+const MANY_SUN_SAMPLES_EXPONENT: f32 = 9.0;
+
+/// Where it reflects none of the sun above e^-36 of its peak, a rough hit takes no sample of
+/// it: its reflected ray then finds the sun at full weight, with a probability below
+/// e^-36 times the peak density times the disc's solid angle (under 1e-13 for lobes as
+/// narrow as a thousandth), so no firefly is left for the samples to have caught.
+const NO_SUN_SAMPLE_EXPONENT: f32 = 36.0;
+
 /// The sun's samples a rough hit at `p` viewed along `wo` takes: `render.sun_samples` where
-/// `lobe` may reflect the sun ([`Lobe::may_reflect`], asked of the sun's centre as `p` sees it,
-/// and of its mirror image about `fold`, the geometric normal, where the wrong-side policy
-/// folds the lobe), one elsewhere, where more would only find a density too small to matter.
-/// Each hit's estimate is unbiased for any count, so the choice moves only the effort: most
-/// rough hits lie outside the sun's glitter.
+/// `lobe` may reflect the sun above e^-9 of its peak ([`Lobe::may_reflect`], asked of the sun's
+/// centre as `p` sees it, and of its mirror image about `fold`, the geometric normal, where the
+/// wrong-side policy folds the lobe), none where it reflects none of it above e^-36, one
+/// between. A hit's strategies are a function of the hit alone, so its estimate is unbiased
+/// for any count, zero included (the reflected ray then weighs the sun it finds fully): the
+/// choice moves only the effort. Most rough hits lie far outside the sun's glitter, where a
+/// sample costs some 800 instructions to find a density of nothing.
 fn sun_samples_here(
     sun: &SunLight,
     settings: &TraceSettings,
@@ -407,15 +424,23 @@ fn sun_samples_here(
     wo: Vec3,
     fold: Option<Vec3>,
 ) -> u32 {
+    let (centre, reach) = (sun.centre_from(p), sun.reach_rad());
+    let may = |exponent: f32| {
+        lobe.may_reflect(wo, centre, reach, exponent)
+            || fold.is_some_and(|ng| {
+                lobe.may_reflect(wo, centre - 2.0 * ng.dot(centre) * ng, reach, exponent)
+            })
+    };
+    if !may(NO_SUN_SAMPLE_EXPONENT) {
+        return 0;
+    }
     // (a scene that skipped validation still gets a count the samples can hold)
     let k = settings.sun_samples.clamp(1, MAX_SUN_SAMPLES);
-    if k == 1 {
-        return 1;
+    if k > 1 && may(MANY_SUN_SAMPLES_EXPONENT) {
+        k
+    } else {
+        1
     }
-    let (centre, reach) = (sun.centre_from(p), sun.reach_rad());
-    let may = lobe.may_reflect(wo, centre, reach)
-        || fold.is_some_and(|ng| lobe.may_reflect(wo, centre - 2.0 * ng.dot(centre) * ng, reach));
-    if may { k } else { 1 }
 }
 
 /// Next-event estimation of the sun at a rough hit at `sp`, `bsdf(w)` giving the reflection's
@@ -434,7 +459,8 @@ fn sun_samples_here(
 /// its radiance where sampling knew it, a map's sun; the analytic disc is uniform), and the
 /// contribution of all of them over its own: resampled importance, unbiased for any choice in
 /// proportion to positive numbers, one shadow ray however many samples. With `k` = 1, one
-/// sample from the first two random numbers, its weight unscaled.
+/// sample from the first two random numbers, its weight unscaled; with `k` = 0 none, and the
+/// reflected ray carries 0.
 fn sample_sun(
     sun: &SunLight,
     sp: SurfacePoint,
@@ -444,7 +470,11 @@ fn sample_sun(
     c: &mut Counters,
     bsdf: impl Fn(Vec3) -> (f32, f32),
 ) -> (Option<(Ray, Vec3)>, f32) {
-    debug_assert!((1..=MAX_SUN_SAMPLES).contains(&k), "{k} sun samples");
+    debug_assert!(k <= MAX_SUN_SAMPLES, "{k} sun samples");
+    if k == 0 {
+        return (None, 0.0);
+    }
+    c.sun_hits += 1;
     c.sun_samples += u64::from(k);
     let (o1, o2) = (rng.f32(), rng.f32());
     let kf = k as f32;

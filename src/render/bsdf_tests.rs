@@ -18,7 +18,8 @@ fn mean_se(n: usize, mut f: impl FnMut() -> f64) -> (f64, f64) {
 /// sun's `k` samples ([`sample_sun`]) plus the sun the reflected ray finds, weighed with the
 /// density [`sample_sun`] hands back for that ray. Their sum must be the sun's light through the
 /// lobe (the disc sampled alone, many times) for any k: a side that did not count the samples
-/// would miss or double its share. The lobe is narrow (slopes of std 1e-3), so the reflected
+/// would miss or double its share. With no sample (k = 0, where a hit's lobe reflects none of
+/// the sun) the reflected ray carries 0 and takes the whole sun, as `weigh_sun` weighs it. The lobe is narrow (slopes of std 1e-3), so the reflected
 /// ray's density rivals the sun samples' and both shares are large.
 #[test]
 fn the_sun_samples_and_the_reflected_ray_share_the_sun_for_any_count() {
@@ -63,7 +64,7 @@ fn the_sun_samples_and_the_reflected_ray_share_the_sun_for_any_count() {
     });
     assert!(truth > 0.0);
     let mut shares = Vec::new();
-    for k in [1, 3, 8] {
+    for k in [1, 3, 8, 0] {
         let (nee, nee_se) = mean_se(n, || {
             let (light, _) = sample_sun(&sun, sp, k, None, &mut rng, &mut c, bsdf);
             light.map_or(0.0, |(_, l)| lum(l))
@@ -77,7 +78,13 @@ fn the_sun_samples_and_the_reflected_ray_share_the_sun_for_any_count() {
                 return 0.0;
             }
             let (_, carried) = sample_sun(&sun, sp, k, Some(p), &mut rng, &mut c, |_| (0.0, 0.0));
-            f as f64 / p as f64 * lum(radiance) * power_heuristic(carried, p_sun) as f64
+            // (`weigh_sun`: a ray that carries no density weighs the sun fully)
+            let weight = if carried > 0.0 {
+                power_heuristic(carried, p_sun)
+            } else {
+                1.0
+            };
+            f as f64 / p as f64 * lum(radiance) * weight as f64
         });
         let se = (nee_se.powi(2) + by_ray_se.powi(2) + truth_se.powi(2)).sqrt();
         assert!(
@@ -87,9 +94,10 @@ fn the_sun_samples_and_the_reflected_ray_share_the_sun_for_any_count() {
         );
         shares.push(by_ray / truth);
     }
-    // both shares large at one sample, the reflected ray's shrinking as the samples grow
+    // both shares large at one sample, the reflected ray's shrinking as the samples grow, and
+    // the whole of it without them
     assert!(
-        shares[0] > 0.1 && shares[0] < 0.9 && shares[2] < shares[0],
+        shares[0] > 0.1 && shares[0] < 0.9 && shares[2] < shares[0] && shares[3] > 0.9,
         "{shares:?}"
     );
 }

@@ -67,12 +67,15 @@ pub struct Counters {
     pub normal_timed_twice_ns: u64,
     #[serde(default)]
     pub normal_timed_twice_points: u64,
-    /// Filtered normals: hits shaded with a rough lobe (the rest resolve every wave), the
-    /// sun sampled at those hits (`sun_samples`), the shadow rays traced for them
+    /// Filtered normals: hits shaded with a rough lobe (the rest resolve every wave), those
+    /// of them that sampled the sun (`sun_hits`; the rest reflect none of it), the sun's
+    /// samples they took (`sun_samples`), the shadow rays traced for them
     /// (`sun_rays`; the rest rose clear of the mesh) and those the sea blocked. Absent from
     /// pass files written before them.
     #[serde(default)]
     pub rough_hits: u64,
+    #[serde(default)]
+    pub sun_hits: u64,
     #[serde(default)]
     pub sun_samples: u64,
     #[serde(default)]
@@ -121,6 +124,7 @@ impl std::ops::AddAssign for Counters {
         self.normal_timed_twice_ns += o.normal_timed_twice_ns;
         self.normal_timed_twice_points += o.normal_timed_twice_points;
         self.rough_hits += o.rough_hits;
+        self.sun_hits += o.sun_hits;
         self.sun_samples += o.sun_samples;
         self.sun_rays += o.sun_rays;
         self.sun_occluded += o.sun_occluded;

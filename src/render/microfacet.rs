@@ -128,13 +128,13 @@ impl Lobe {
     }
 
     /// Whether the lobe's normals may reflect world direction `wo` into some direction within
-    /// `reach` radians of world direction `w`: the half vector's slopes, less the reach as it
-    /// moves them, within three roughnesses of the lobe's centre (a density above e^-9 of its
-    /// peak). Moving w by an angle moves the half vector by up to that over |wo + w| (half of it
-    /// at normal incidence, more at grazing), and its slope by that over cos^2 of its tilt;
-    /// the reach is taken at twice that. A question of effort, not of the estimate: how many
-    /// samples to spend there.
-    pub fn may_reflect(&self, wo: Vec3, w: Vec3, reach: f32) -> bool {
+    /// `reach` radians of world direction `w` with a density above e^-`exponent` of its peak:
+    /// the half vector's slopes, less the reach as it moves them, within sqrt(`exponent`)
+    /// roughnesses of the lobe's centre. Moving w by an angle moves the half vector by up to
+    /// that over |wo + w| (half of it at normal incidence, more at grazing), and its slope by
+    /// that over cos^2 of its tilt; the reach is taken at twice that. A question of effort, not
+    /// of the estimate: how many samples to spend there.
+    pub fn may_reflect(&self, wo: Vec3, w: Vec3, reach: f32, exponent: f32) -> bool {
         let sum = wo + w;
         let len = sum.length();
         if len <= 1e-3 {
@@ -147,7 +147,7 @@ impl Lobe {
         let r = 2.0 * reach / (len * h.z * h.z);
         let sx = ((-h.x / h.z - self.mean[0]).abs() - r).max(0.0) / self.alpha[0];
         let sy = ((-h.y / h.z - self.mean[1]).abs() - r).max(0.0) / self.alpha[1];
-        sx * sx + sy * sy < 9.0
+        sx * sx + sy * sy < exponent
     }
 
     /// Smith's Lambda for local direction `w` (either side: |w.z| is used).
