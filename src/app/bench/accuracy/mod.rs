@@ -224,6 +224,23 @@ pub struct Point {
     pub pareto: bool,
 }
 
+/// A mapped render at the sweep's most samples, and the cheapest render of another method (on
+/// any mesh) whose error is at most its error, and the cheapest whose error lies inside its
+/// interval (at most its upper bound): the run-time-vs-error frontier read at that error.
+#[derive(Clone, Debug, Serialize)]
+pub struct Match {
+    /// "lod spp" of the mapped render.
+    pub mapped: String,
+    pub mapped_error: f64,
+    pub mapped_seconds: f64,
+    /// The other method's normals and surface ("filtered mesh", "mapped exact").
+    pub method: String,
+    /// "lod spp", error and seconds of its cheapest render at most at the mapped error.
+    pub at_most: Option<(String, f64, f64)>,
+    /// The same, inside the mapped render's interval.
+    pub within: Option<(String, f64, f64)>,
+}
+
 /// The reference the points are measured against.
 #[derive(Clone, Debug, Serialize)]
 pub struct Reference {
@@ -261,6 +278,9 @@ pub struct AccuracyReport {
     pub not_monotone: Vec<String>,
     /// The Pareto front, fastest first.
     pub front: Vec<Point>,
+    /// Each mapped render at the most samples against the cheapest render of a new method
+    /// (filtered normals, the exact surface), on any mesh, that reaches its error.
+    pub matches: Vec<Match>,
     pub width: usize,
     pub rows_deg: (f64, f64),
     /// The wrong-side policy of every render, the reference's included.
@@ -516,5 +536,38 @@ mod tests {
         );
         assert_eq!(figure(0.1, [0.05, 0.15], true), "0.1000 [0.0500, 0.1500]");
         assert_eq!(figure(0.0, [0.0, 0.02], false), "< 0.0200");
+    }
+
+    #[test]
+    fn another_method_is_matched_at_each_mapped_error_on_any_mesh() {
+        let with = |mut p: Point, normals: NormalMode, seconds: f64| {
+            (p.normals, p.seconds_total) = (normals, seconds);
+            p
+        };
+        let pts = vec![
+            point("a", 8, 0.30, [0.25, 0.35]),
+            point("a", 16, 0.20, [0.15, 0.25]),
+            point("b", 16, 0.10, [0.08, 0.12]),
+            // filtered: on a at 0.22 (inside a's interval only), on b at 0.19 (at most a's
+            // error, but dearer), and nothing near b's
+            with(point("a", 8, 0.22, [0.21, 0.23]), NormalMode::Filtered, 2.0),
+            with(point("b", 8, 0.19, [0.18, 0.20]), NormalMode::Filtered, 5.0),
+            with(
+                point("b", 16, 0.15, [0.14, 0.16]),
+                NormalMode::Filtered,
+                9.0,
+            ),
+        ];
+        let m = report::matches(&pts);
+        // a's and b's renders at their most samples (16), one method
+        assert_eq!(m.len(), 2, "{m:?}");
+        assert_eq!(
+            (m[0].mapped.as_str(), m[0].method.as_str()),
+            ("a 16", "filtered mesh")
+        );
+        assert_eq!(m[0].at_most.as_ref().map(|r| r.0.as_str()), Some("b 8"));
+        assert_eq!(m[0].within.as_ref().map(|r| r.0.as_str()), Some("a 8"));
+        assert_eq!(m[1].mapped, "b 16");
+        assert!(m[1].at_most.is_none() && m[1].within.is_none());
     }
 }

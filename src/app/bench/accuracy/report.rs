@@ -4,7 +4,7 @@
 use std::fmt;
 use std::time::Instant;
 
-use super::{AccuracyJob, AccuracyReport, Point, REFERENCE_NOISE_SHARE, ROWS, Reference};
+use super::{AccuracyJob, AccuracyReport, Match, Point, REFERENCE_NOISE_SHARE, ROWS, Reference};
 use super::{figure, not_monotone};
 use crate::analysis::charts::{FrontierPoint, frontier};
 use crate::app::AppError;
@@ -114,6 +114,7 @@ pub(super) fn write(
     let mut front: Vec<Point> = points.iter().filter(|p| p.pareto).cloned().collect();
     front.sort_by(|a, b| a.seconds_total.total_cmp(&b.seconds_total));
     let not_monotone = not_monotone(&points);
+    let matches = matches(&points);
     let report = AccuracyReport {
         commit: crate::app::commit(),
         reference_noise_share: reference.noise_share,
@@ -122,6 +123,7 @@ pub(super) fn write(
         points,
         reference,
         front,
+        matches,
         width: job.width,
         wrong_side: job.scene.render.wrong_side,
         interp: job.scene.ocean.interp,
@@ -135,6 +137,51 @@ pub(super) fn write(
     staged.commit()?;
     write_json(&json, &report)?;
     Ok(report)
+}
+
+/// Each mapped mesh render at its tessellation's most samples against the cheapest render of
+/// every other method (filtered normals on a mesh, mapped normals on the exact surface), on any
+/// mesh, that reaches its error ([`Match`]); empty without another method.
+pub(super) fn matches(points: &[Point]) -> Vec<Match> {
+    let method = |p: &Point| format!("{} {}", p.normals, p.surface);
+    let mapped_mesh = |p: &Point| p.normals == NormalMode::Mapped && p.surface == SurfaceKind::Mesh;
+    let mut methods: Vec<String> = points
+        .iter()
+        .filter(|p| p.normals == NormalMode::Filtered || p.surface == SurfaceKind::Exact)
+        .map(method)
+        .collect();
+    methods.sort();
+    methods.dedup();
+    let name = |p: &Point| format!("{} {}", p.lod, p.spp);
+    let cheapest = |m: &str, bound: f64| {
+        points
+            .iter()
+            .filter(|q| method(q) == m && q.error <= bound)
+            .min_by(|a, b| a.seconds_total.total_cmp(&b.seconds_total))
+            .map(|q| (name(q), q.error, q.seconds_total))
+    };
+    let mut out = Vec::new();
+    for p in points.iter().filter(|&p| mapped_mesh(p)) {
+        let most = points
+            .iter()
+            .filter(|q| mapped_mesh(q) && q.lod == p.lod)
+            .map(|q| q.spp)
+            .max();
+        if Some(p.spp) != most {
+            continue;
+        }
+        for m in &methods {
+            out.push(Match {
+                mapped: name(p),
+                mapped_error: p.error,
+                mapped_seconds: p.seconds_total,
+                method: m.clone(),
+                at_most: cheapest(m, p.error),
+                within: cheapest(m, p.error_ci[1]),
+            });
+        }
+    }
+    out
 }
 
 impl fmt::Display for AccuracyReport {
@@ -182,6 +229,30 @@ impl fmt::Display for AccuracyReport {
                 p.rmse_relative_ci[0],
                 p.rmse_relative_ci[1],
                 if p.pareto { "*" } else { "" }
+            )?;
+        }
+        if !self.matches.is_empty() {
+            writeln!(
+                f,
+                "  the cheapest render of another method (any mesh) at a mapped render's error: at most it | inside its interval (time against the mapped render's)"
+            )?;
+        }
+        for m in &self.matches {
+            let found = |r: &Option<(String, f64, f64)>| match r {
+                Some((name, e, t)) => {
+                    format!("{name}: {e:.4}, {t:.2} s ({:.2}x)", t / m.mapped_seconds)
+                }
+                None => "none".to_string(),
+            };
+            writeln!(
+                f,
+                "  mapped {:<16} {:.4}, {:>6.2} s   {:<15} {:<34} | {}",
+                m.mapped,
+                m.mapped_error,
+                m.mapped_seconds,
+                m.method,
+                found(&m.at_most),
+                found(&m.within)
             )?;
         }
         if !self.monotone_within_intervals {
