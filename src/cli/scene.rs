@@ -242,8 +242,8 @@ pub struct RenderArgs {
     #[arg(long, value_parser = choice::<vastocean::config::FilterLobe>())]
     filter_lobe: Option<vastocean::config::FilterLobe>,
     /// Filtered normals: the sun's samples at a rough hit whose lobe may reflect the sun (one
-    /// elsewhere), spread evenly over its disc with one shadow ray among them (1 to 16,
-    /// default 8; more = less noise in the glitter).
+    /// at its faint edge, none where it reflects none), spread evenly over its disc with one
+    /// shadow ray among them (1 to 16, default 8; more = less noise in the glitter).
     #[arg(long)]
     sun_samples: Option<u32>,
     /// Render only the elevations TOP:BOTTOM in degrees, e.g. +1:-6 (equirectangular camera).

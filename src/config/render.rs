@@ -127,8 +127,8 @@ pub struct RenderConfig {
     /// Filtered normals: the lobe of the waves below the footprint.
     pub filter_lobe: FilterLobe,
     /// Filtered normals: the sun's samples at a rough hit seen from the air whose lobe may
-    /// reflect the sun (one elsewhere), spread evenly over its disc, one shadow ray among them
-    /// (docs/filtered.md, "The sun's samples").
+    /// reflect the sun (one at its faint edge, none where it reflects none), spread evenly over
+    /// its disc, one shadow ray among them (docs/filtered.md, "The sun's samples").
     pub sun_samples: u32,
     /// Most segments (rays) in one path (the paper: 10).
     pub max_segments: u32,
