@@ -403,9 +403,10 @@ const GOLDEN_STEPS: [f32; MAX_SUN_SAMPLES as usize] = {
 const MANY_SUN_SAMPLES_EXPONENT: f32 = 9.0;
 
 /// Where it reflects none of the sun above e^-36 of its peak, a rough hit takes no sample of
-/// it: its reflected ray then finds the sun at full weight, with a probability below
-/// e^-36 times the peak density times the disc's solid angle (under 1e-13 for lobes as
-/// narrow as a thousandth), so no firefly is left for the samples to have caught.
+/// it: its reflected ray then finds the sun at full weight, but only if its normal lies beyond
+/// that bound, where a Gaussian slope distribution holds e^-36 (2e-16) of its normals drawn by
+/// area (visible normals weigh them by a bounded factor), so no firefly is left for the
+/// samples to have caught.
 const NO_SUN_SAMPLE_EXPONENT: f32 = 36.0;
 
 /// The sun's samples a rough hit at `p` viewed along `wo` takes: `render.sun_samples` where
