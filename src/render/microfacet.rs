@@ -127,27 +127,28 @@ impl Lobe {
             / (std::f32::consts::PI * self.alpha[0] * self.alpha[1] * cos2 * cos2)
     }
 
-    /// Whether the lobe's normals may reflect world direction `wo` into some direction within
-    /// `reach` radians of world direction `w` with a density above e^-`exponent` of its peak:
-    /// the half vector's slopes, less the reach as it moves them, within sqrt(`exponent`)
-    /// roughnesses of the lobe's centre. Moving w by an angle moves the half vector by up to
-    /// that over |wo + w| (half of it at normal incidence, more at grazing), and its slope by
-    /// that over cos^2 of its tilt; the reach is taken at twice that. A question of effort, not
-    /// of the estimate: how many samples to spend there.
-    pub fn may_reflect(&self, wo: Vec3, w: Vec3, reach: f32, exponent: f32) -> bool {
+    /// The smallest exponent e of the lobe's density (e^-e of its peak) with which its normals
+    /// may reflect world direction `wo` into some direction within `reach` radians of world
+    /// direction `w`: the half vector's slopes, less the reach as it moves them, measured in
+    /// roughnesses from the lobe's centre, squared (0 where the half vector is undefined or
+    /// below the lobe). Moving w by an angle moves the half vector by up to that over |wo + w|
+    /// (half of it at normal incidence, more at grazing), and its slope by that over cos^2 of
+    /// its tilt; the reach is taken at twice that. A question of effort, not of the estimate:
+    /// how many samples to spend there.
+    pub fn reach_exponent(&self, wo: Vec3, w: Vec3, reach: f32) -> f32 {
         let sum = wo + w;
         let len = sum.length();
         if len <= 1e-3 {
-            return true;
+            return 0.0;
         }
         let (h, below) = self.local(sum / len);
         if below || h.z <= 1e-3 {
-            return true;
+            return 0.0;
         }
         let r = 2.0 * reach / (len * h.z * h.z);
         let sx = ((-h.x / h.z - self.mean[0]).abs() - r).max(0.0) / self.alpha[0];
         let sy = ((-h.y / h.z - self.mean[1]).abs() - r).max(0.0) / self.alpha[1];
-        sx * sx + sy * sy < exponent
+        sx * sx + sy * sy
     }
 
     /// Smith's Lambda for local direction `w` (either side: |w.z| is used).

@@ -343,7 +343,7 @@ fn sun_question_holds(limit: f32) {
         if centre.y <= 0.0 {
             continue;
         }
-        let says = lobe.may_reflect(wo, centre, reach, limit);
+        let says = lobe.reach_exponent(wo, centre, reach) < limit;
         let u = Vec3::Y.cross(centre).normalize();
         let v = centre.cross(u);
         let meets = (0..512).any(|j| {
