@@ -251,3 +251,42 @@ fn a_level_holds_its_layers_waves_times_its_gaussian() {
         }
     }
 }
+
+#[test]
+fn one_pass_over_the_cells_gives_each_grids_own_tables() {
+    // LayerSlopes::of against the separate passes over the layer and its levels, of the sea
+    // and as read, at rest and at a time where every cell's phase turns: the terms are the
+    // same, only the order of the rows' sums differs.
+    let mut s = surface();
+    for t in [0.0, 5.0] {
+        s.set_time(t).unwrap();
+        let interp = s.params().interp;
+        let read = SlopeSource::Read(interp);
+        for source in [SlopeSource::Spectrum, read] {
+            let tables = SurfaceSlopes::new(&s, source);
+            let levels = s.levels();
+            for (i, (layer, got)) in s.layers().iter().zip(tables.layers()).enumerate() {
+                let level = |l: usize| if l == 0 { layer } else { levels.level(i, l) };
+                let count = levels.count(i);
+                let close = |a: Cov, b: Cov, what: &str| {
+                    let scale = b[0].abs() + b[2].abs();
+                    for c in 0..3 {
+                        assert!(
+                            (a[c] - b[c]).abs() <= 1e-12 * scale,
+                            "t {t}, {source:?}, layer {i}, {what}: {a:?} against {b:?}"
+                        );
+                    }
+                };
+                close(got.total(), layer.slope_cov(source), "total");
+                assert_eq!(got.levels(), count);
+                for l in 0..=count {
+                    close(got.own[l], level(l).slope_cov(read), &format!("own {l}"));
+                }
+                for l in 0..count {
+                    let want = level(l).slope_cross(level(l + 1), interp);
+                    close(got.cross[l], want, &format!("cross {l}"));
+                }
+            }
+        }
+    }
+}

@@ -21,38 +21,49 @@ impl Layer {
     /// times a big layer, and the per-cell index arithmetic was most of its cost.
     #[inline]
     pub(crate) fn h_tilde_row(&self, ix: usize, t: f64) -> impl Fn(usize) -> Complex<f64> + '_ {
+        let pairs = self.h0_pair_row(ix);
+        let phase = self.phase_row(ix, t);
+        move |iz: usize| match pairs(iz) {
+            Some((a, b)) => h_tilde_of(a, b, phase(iz)),
+            None => Complex::default(),
+        }
+    }
+
+    /// The amplitudes h~(k, t) of row `ix` combines, cell by cell ([`h_tilde_of`]): h0(k) and
+    /// h0(-k), or `None` where both are zero (outside the band's reach, or no energy).
+    #[inline]
+    pub(crate) fn h0_pair_row(&self, ix: usize) -> impl Fn(usize) -> Option<(C32, C32)> + '_ {
         let (n, c) = (self.n, &self.cells);
         // the mirror -k of a cell within the band's reach is within it too
         let rows = c.inside(ix).then(|| {
             let row = |i: usize| &self.h0[c.compact_index(i) * c.width..][..c.width];
             (row(ix), row((n - ix) & (n - 1)))
         });
-        let dk = TAU / self.size_m;
-        let kx = signed_index(ix, n) * dk;
-        let depth_m = self.depth_m;
         move |iz: usize| {
-            let Some((ra, rb)) = rows.filter(|_| c.inside(iz)) else {
-                return Complex::default();
-            };
+            let (ra, rb) = rows.filter(|_| c.inside(iz))?;
             let a = ra[c.compact_index(iz)];
             let b = rb[c.compact_index((n - iz) & (n - 1))];
-            if a == C32::default() && b == C32::default() {
-                return Complex::default();
-            }
-            // e^(i omega t); at t = 0 exactly 1 (what sin_cos(0) gives), the time of every still
-            // render: the dispersion relation's tanh and the sine and cosine were 5 % of its
-            // build
-            let e = if t == 0.0 {
+            (a != C32::default() || b != C32::default()).then_some((a, b))
+        }
+    }
+
+    /// e^(i omega t) for the cells of row `ix` (omega by the dispersion relation at this
+    /// layer's depth); at t = 0 exactly 1 (what sin_cos(0) gives), the time of every still
+    /// render: the dispersion relation's tanh and the sine and cosine were 5 % of its build.
+    #[inline]
+    pub(crate) fn phase_row(&self, ix: usize, t: f64) -> impl Fn(usize) -> Complex<f64> + use<> {
+        let (n, depth_m) = (self.n, self.depth_m);
+        let dk = TAU / self.size_m;
+        let kx = signed_index(ix, n) * dk;
+        move |iz: usize| {
+            if t == 0.0 {
                 Complex::new(1.0, 0.0)
             } else {
                 let k = kx.hypot(signed_index(iz, n) * dk);
                 let omega = crate::ocean::spectrum::dispersion(k, depth_m);
                 let (s, c) = (omega * t).rem_euclid(TAU).sin_cos();
                 Complex::new(c, s)
-            };
-            let a = Complex::new(a.re as f64, a.im as f64);
-            let b = Complex::new(b.re as f64, -(b.im as f64));
-            a * e + b * e.conj()
+            }
         }
     }
 
@@ -279,6 +290,15 @@ impl Layer {
 /// The four intermediate planes of [`Layer::compute_fields_in`], kept between layers.
 #[derive(Default)]
 pub struct FieldPlanes([Vec<C32>; 4]);
+
+/// h~(k, t) of eq. 2 from h0(k) = `a`, h0(-k) = `b` and e^(i omega t) = `e`:
+/// a e + conj(b) conj(e), in f64.
+#[inline]
+pub(crate) fn h_tilde_of(a: C32, b: C32, e: Complex<f64>) -> Complex<f64> {
+    let a = Complex::new(a.re as f64, a.im as f64);
+    let b = Complex::new(b.re as f64, -(b.im as f64));
+    a * e + b * e.conj()
+}
 
 /// The spectral multipliers m_j(k) of [`Layer::compute_fields`]'s four planes.
 #[inline]

@@ -45,6 +45,7 @@ mod level;
 mod read;
 
 pub use fields::FieldPlanes;
+pub(crate) use fields::h_tilde_of;
 
 #[cfg(test)]
 use read::{LANE_RANGE, catmull_rom, split, split_lanes};
