@@ -318,8 +318,8 @@ impl SceneRef<'_> {
                 }
             }
         }
-        self.sky_along(entries, sky_entry.as_slice(), out);
         if m == 0 && n_object == 0 {
+            self.sky_along(entries, sky_entry.as_slice(), out);
             return;
         }
         let mut hits = [None; CAMERA_BATCH];
@@ -390,8 +390,10 @@ impl SceneRef<'_> {
         // the shaded hits' entries, and their scattering, written in place by `scatter`
         let mut shaded_k = Slots::<u8, CAMERA_BATCH>::new();
         let mut shaded = Slots::<Scatter, CAMERA_BATCH>::new();
-        // the misses into the sky, looked up together as the untraced rays' are
-        let mut sky_misses = Slots::<u8, CAMERA_BATCH>::new();
+        // the misses into the sky, looked up together with the untraced rays that see it: one
+        // lookup a batch, not two (the sky's lanes are evaluated in whole chunks, and each of
+        // the two lists held a few rays)
+        let mut sky_misses = sky_entry;
         for (i, (&k, hit)) in traced_entry[..m].iter().zip(&hits[..m]).enumerate() {
             let e = &entries[k as usize];
             match hit {

@@ -70,6 +70,14 @@ pub const TURBIDITY_RANGE: (f64, f64) = (1.7, 10.0);
 /// Rays [`Sky::radiance_many`] evaluates side by side.
 pub const SKY_LANES: usize = 16;
 
+/// What [`Sky::radiance_many`] evaluates in lanes; the other analytic skies are cheap one by
+/// one.
+enum Lanes<'a> {
+    Map(&'a RgbImage),
+    Clear(&'a ClearLanes),
+    HandMade(&'a HandMadeLanes),
+}
+
 /// Where sky radiance comes from.
 #[derive(Clone, Debug)]
 pub enum SkySource {
@@ -142,12 +150,6 @@ impl Sky {
     /// and two exponentials); side by side they overlap.
     pub fn radiance_many(&self, orgs: &[Vec3], dirs: &[Vec3], out: &mut [Vec3]) {
         assert!(orgs.len() == dirs.len() && out.len() == dirs.len());
-        // What the lanes evaluate; the other analytic skies are cheap one by one.
-        enum Lanes<'a> {
-            Map(&'a RgbImage),
-            Clear(&'a ClearLanes),
-            HandMade(&'a HandMadeLanes),
-        }
         let lanes = match &self.source {
             SkySource::Map(img) => Lanes::Map(img),
             SkySource::Analytic {
@@ -165,49 +167,69 @@ impl Sky {
                 return;
             }
         };
-        for ((o, d), out) in orgs
-            .chunks(SKY_LANES)
-            .zip(dirs.chunks(SKY_LANES))
-            .zip(out.chunks_mut(SKY_LANES))
-        {
-            // The directions in lanes (the unused ones look at the zenith), then every lane's
-            // sky: each step exactly what `radiance` does for one ray.
-            let (mut x, mut y, mut z) = ([0f32; SKY_LANES], [1f32; SKY_LANES], [0f32; SKY_LANES]);
-            let mut l = [[0f32; 3]; SKY_LANES];
-            match lanes {
-                Lanes::Map(img) => {
-                    for (i, (o, d)) in o.iter().zip(d).enumerate() {
-                        [x[i], y[i], z[i]] = self.direction(*o, *d).to_array();
-                    }
-                    let mut t = [Taps::default(); SKY_LANES];
-                    for i in 0..SKY_LANES {
-                        t[i] = taps([x[i], y[i], z[i]], img.width, img.height);
-                    }
-                    for (l, t) in l.iter_mut().zip(&t[..o.len()]) {
-                        *l = read_taps(img, t);
-                    }
+        // Whole chunks of SKY_LANES rays, then the rest in the smallest chunk of 4, 8 or 16
+        // that holds it: a batch's lookups hold four rays on average, and a chunk evaluates
+        // every lane, used or not.
+        let mut start = 0;
+        while start < dirs.len() {
+            let rest = dirs.len() - start;
+            let len = rest.min(SKY_LANES);
+            let (o, d) = (&orgs[start..start + len], &dirs[start..start + len]);
+            let out = &mut out[start..start + len];
+            match len {
+                ..=4 => self.radiance_chunk::<4>(&lanes, o, d, out),
+                ..=8 => self.radiance_chunk::<8>(&lanes, o, d, out),
+                _ => self.radiance_chunk::<SKY_LANES>(&lanes, o, d, out),
+            }
+            start += len;
+        }
+    }
+
+    /// [`Self::radiance_many`] for at most `L` rays, in `L` lanes (the unused ones look at the
+    /// zenith), each step exactly what `radiance` does for one ray.
+    #[inline(always)]
+    fn radiance_chunk<const L: usize>(
+        &self,
+        lanes: &Lanes,
+        o: &[Vec3],
+        d: &[Vec3],
+        out: &mut [Vec3],
+    ) {
+        let (mut x, mut y, mut z) = ([0f32; L], [1f32; L], [0f32; L]);
+        let mut l = [[0f32; 3]; L];
+        match *lanes {
+            Lanes::Map(img) => {
+                for (i, (o, d)) in o.iter().zip(d).enumerate() {
+                    [x[i], y[i], z[i]] = self.direction(*o, *d).to_array();
                 }
-                Lanes::Clear(c) => {
-                    for (i, (o, d)) in o.iter().zip(d).enumerate() {
-                        [x[i], y[i], z[i]] = self.unit_direction(*o, *d).to_array();
-                    }
-                    c.lanes(&x, &y, &z, &mut l);
-                    for l in &mut l {
-                        *l = clip(*l, self.clip_luminance);
-                    }
+                let mut t = [Taps::default(); L];
+                for i in 0..L {
+                    t[i] = taps([x[i], y[i], z[i]], img.width, img.height);
                 }
-                Lanes::HandMade(h) => {
-                    for (i, (o, d)) in o.iter().zip(d).enumerate() {
-                        [x[i], y[i], z[i]] = self.unit_direction(*o, *d).to_array();
-                    }
-                    for i in 0..SKY_LANES {
-                        l[i] = clip(h.lane([x[i], y[i], z[i]]), self.clip_luminance);
-                    }
+                for (l, t) in l.iter_mut().zip(&t[..o.len()]) {
+                    *l = read_taps(img, t);
                 }
             }
-            for (out, l) in out.iter_mut().zip(l) {
-                *out = self.scale * Vec3::from(l);
+            Lanes::Clear(c) => {
+                for (i, (o, d)) in o.iter().zip(d).enumerate() {
+                    [x[i], y[i], z[i]] = self.unit_direction(*o, *d).to_array();
+                }
+                c.lanes(&x, &y, &z, &mut l);
+                for l in &mut l {
+                    *l = clip(*l, self.clip_luminance);
+                }
             }
+            Lanes::HandMade(h) => {
+                for (i, (o, d)) in o.iter().zip(d).enumerate() {
+                    [x[i], y[i], z[i]] = self.unit_direction(*o, *d).to_array();
+                }
+                for i in 0..L {
+                    l[i] = clip(h.lane([x[i], y[i], z[i]]), self.clip_luminance);
+                }
+            }
+        }
+        for (out, l) in out.iter_mut().zip(l) {
+            *out = self.scale * Vec3::from(l);
         }
     }
 
