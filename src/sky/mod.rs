@@ -177,8 +177,8 @@ impl Sky {
             let (o, d) = (&orgs[start..start + len], &dirs[start..start + len]);
             let out = &mut out[start..start + len];
             match len {
-                ..=4 => self.radiance_chunk::<4>(&lanes, o, d, out),
-                ..=8 => self.radiance_chunk::<8>(&lanes, o, d, out),
+                0..=4 => self.radiance_chunk::<4>(&lanes, o, d, out),
+                5..=8 => self.radiance_chunk::<8>(&lanes, o, d, out),
                 _ => self.radiance_chunk::<SKY_LANES>(&lanes, o, d, out),
             }
             start += len;
