@@ -173,8 +173,9 @@ pub struct LayerSlopes {
     own: Vec<Cov>,
     /// `cross[l]`: the mean product of level l's read and level l + 1's.
     cross: Vec<Cov>,
-    /// log2 of the layer's grid spacing, m: level l's Gaussian has std 2^l of it.
-    log2_dx: f32,
+    /// 2^(log2 dx + 1), dx the layer's grid spacing, m: the footprint that reads level 1 whole
+    /// (level l's Gaussian has std 2^l dx), computed once, not at every split.
+    level1_sigma_m: f32,
 }
 
 impl LayerSlopes {
@@ -312,7 +313,7 @@ impl LayerSlopes {
                 })
                 .collect(),
             cross: (0..count).map(|g| sum(cross_at(g))).collect(),
-            log2_dx: layer.dx().log2() as f32,
+            level1_sigma_m: (layer.dx().log2() as f32 + 1.0).exp2(),
         }
     }
 
@@ -354,7 +355,7 @@ impl LayerSlopes {
     /// the layer's own texels at a footprint of zero, whose read leaves the short waves at one
     /// minus the fraction of their amplitude. At most one past the last level: not read.
     pub fn level_coordinate(&self, sigma_m: f32) -> f32 {
-        let x = sigma_m / (self.log2_dx + 1.0).exp2();
+        let x = sigma_m / self.level1_sigma_m;
         let l = if x <= 1.0 { x.max(0.0) } else { 1.0 + x.log2() };
         l.min((self.levels() + 1) as f32)
     }
@@ -416,7 +417,10 @@ impl SurfaceSlopes {
         let mut cov = [0.0f64; 3];
         for ((level, blend), l) in s.levels.iter_mut().zip(&mut s.blend).zip(&self.layers) {
             let x = l.level_coordinate(sigma_m);
-            let (a, t) = (x.floor(), x - x.floor());
+            // x is finite and at least 0: its floor by truncation (`floor` is a library call
+            // on the baseline x86-64 target)
+            let a = x as u32;
+            let t = x - a as f32;
             let a = a as usize;
             (*level, *blend) = if a > l.levels() {
                 (NOT_READ, 0.0)
