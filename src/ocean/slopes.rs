@@ -214,10 +214,7 @@ impl LayerSlopes {
             })
             .collect();
         // every signed index below a grid's reach (along either axis) is in its band
-        let reach: Vec<i64> = grids
-            .iter()
-            .map(|g| g.band_indices().count().div_ceil(2) as i64)
-            .collect();
+        let reach: Vec<i64> = grids.iter().map(|g| g.band_reach() as i64).collect();
         assert!(
             reach.windows(2).all(|r| r[1] <= r[0])
                 && levels.iter().all(|g| g.time_s() == layer.time_s()),

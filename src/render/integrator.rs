@@ -287,6 +287,8 @@ impl SceneRef<'_> {
         let mut traced = [PathVertex::NONE.ray; CAMERA_BATCH];
         let mut traced_entry = [0u8; CAMERA_BATCH];
         let mut m = 0;
+        // the entries that see the sky: the untraced ones here, the misses below, looked up
+        // together once (the sky's lanes are evaluated in whole chunks)
         let mut sky_entry = Slots::<u8, CAMERA_BATCH>::new();
         for (k, e) in entries.iter().enumerate() {
             let answer = if e.in_object {
@@ -390,10 +392,6 @@ impl SceneRef<'_> {
         // the shaded hits' entries, and their scattering, written in place by `scatter`
         let mut shaded_k = Slots::<u8, CAMERA_BATCH>::new();
         let mut shaded = Slots::<Scatter, CAMERA_BATCH>::new();
-        // the misses into the sky, looked up together with the untraced rays that see it: one
-        // lookup a batch, not two (the sky's lanes are evaluated in whole chunks, and each of
-        // the two lists held a few rays)
-        let mut sky_misses = sky_entry;
         for (i, (&k, hit)) in traced_entry[..m].iter().zip(&hits[..m]).enumerate() {
             let e = &entries[k as usize];
             match hit {
@@ -403,7 +401,7 @@ impl SceneRef<'_> {
                         out[k as usize] =
                             self.weigh_sun(e.ray.org.into(), e.ray.dir.into(), e.sun_pdf, l)
                     }
-                    None => sky_misses.push(k),
+                    None => sky_entry.push(k),
                 },
                 Some(hit) => {
                     c.hits += 1;
@@ -429,7 +427,7 @@ impl SceneRef<'_> {
                 }
             }
         }
-        self.sky_along(entries, sky_misses.as_slice(), out);
+        self.sky_along(entries, sky_entry.as_slice(), out);
         let (shaded_k, shaded) = (shaded_k.as_slice(), shaded.as_slice());
         let n_shaded = shaded.len();
         let mut objects = Slots::<(u8, ObjectScatter), CAMERA_BATCH>::new();

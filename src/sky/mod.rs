@@ -144,8 +144,8 @@ impl Sky {
     }
 
     /// [`Self::radiance`] of many rays, `out[i]` for `(orgs[i], dirs[i])`, bit for bit what
-    /// each gets alone. A map and the analytic clear sky are evaluated [`SKY_LANES`] rays at a
-    /// time, in loops the compiler vectorises: one ray's lookup is a chain of dependent square
+    /// each gets alone. A map and the analytic clear sky are evaluated up to [`SKY_LANES`] rays
+    /// at a time, in loops the compiler vectorises: one ray's lookup is a chain of dependent square
     /// roots, divisions and polynomials (a map's two angles, the clear sky's angle to the sun
     /// and two exponentials); side by side they overlap.
     pub fn radiance_many(&self, orgs: &[Vec3], dirs: &[Vec3], out: &mut [Vec3]) {

@@ -187,6 +187,12 @@ impl BandCells {
         }
     }
 
+    /// m: every signed index s with |s| < m (along either axis) is within the reach.
+    #[inline]
+    pub fn reach(&self) -> usize {
+        self.reach
+    }
+
     /// The compact index of grid index `i`, which must be inside (see [`BandCells::inside`]).
     #[inline]
     pub fn compact_index(&self, i: usize) -> usize {

@@ -42,26 +42,25 @@ impl Layer {
             .collect();
         // The level reaches no further than the layer (its k_max is at most the layer's), so
         // each of its rows is the layer's row of the same signed index, cut to the level's
-        // columns: its non-negative indices first, its negative ones at the row's end.
+        // columns: the layer's compact index of each of the level's, per axis.
         let (width, layer_width) = (cells.width, self.cells.width);
         assert!(
-            width <= layer_width,
+            cells.reach() <= self.cells.reach(),
             "a level reaches no further than its layer"
         );
-        let reach = width.div_ceil(2);
-        let of_layer = |c: usize| {
-            if c < reach {
-                c
-            } else {
-                c + layer_width - width
-            }
-        };
+        let of_layer: Vec<usize> = (0..width)
+            .map(|c| {
+                let s = signed_index(cells.grid_index(c), n) as i64;
+                let i = s.rem_euclid(self.n as i64) as usize;
+                self.cells.compact_index(i)
+            })
+            .collect();
         // each row on its own core; the power summed after, in cell order
         let mut h0 = vec![C32::default(); width * width];
         h0.par_chunks_mut(width).enumerate().for_each(|(cx, row)| {
-            let layer_row = &self.h0[of_layer(cx) * layer_width..][..layer_width];
+            let layer_row = &self.h0[of_layer[cx] * layer_width..][..layer_width];
             for (cz, cell) in row.iter_mut().enumerate() {
-                *cell = layer_row[of_layer(cz)] * (gauss[cx] * gauss[cz]) as f32;
+                *cell = layer_row[of_layer[cz]] * (gauss[cx] * gauss[cz]) as f32;
             }
         });
         let power: f64 = h0.iter().map(|h| h.norm_sqr() as f64).sum();

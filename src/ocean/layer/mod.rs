@@ -365,6 +365,11 @@ impl Layer {
         self.cells.grid_indices()
     }
 
+    /// The band's reach m: the cells with |signed index| < m along both axes can hold energy.
+    pub(crate) fn band_reach(&self) -> usize {
+        self.cells.reach()
+    }
+
     /// Means and bounds over the grid points (see [`GridStats`]).
     pub fn grid_stats(&self) -> &GridStats {
         &self.grid
