@@ -19,6 +19,7 @@
 
 mod bounds;
 mod implicit;
+mod pyramid;
 mod search;
 
 use std::sync::Arc;
