@@ -41,11 +41,39 @@ pub(super) fn sphere_coords(p: [f64; 3], r: f64) -> ([f64; 2], f64) {
     ([x * k, z * k], alt)
 }
 
-/// Where the last evaluation along a ray found the surface: its arc position and nominal x.
+/// Where the last evaluation along a ray found the surface: its arc position, nominal x, and
+/// the Jacobian of the map x -> s there, I + dD/dx (symmetric: `[a11, a12, a22]`).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Warm {
     pub s: [f64; 2],
     pub x: [f64; 2],
+    pub jacobian: [f64; 3],
+}
+
+/// The Jacobian I + dD/dx of the map from nominal to arc position, `[a11, a12, a22]`, from the
+/// fields at one point, and its determinant.
+#[inline]
+fn jacobian(f: &crate::ocean::Texel) -> ([f64; 3], f64) {
+    let j = [
+        1.0 + f[field::DDX_DX] as f64,
+        f[field::DDX_DZ] as f64,
+        1.0 + f[field::DDZ_DZ] as f64,
+    ];
+    (j, j[0] * j[2] - j[1] * j[1])
+}
+
+/// `x + J^-1 r` for the symmetric `j` of determinant `det`, or `x + r` (the fixed-point step)
+/// where J is near singular (a fold's neighbourhood).
+#[inline]
+fn newton_step(x: [f64; 2], r: [f64; 2], j: [f64; 3], det: f64) -> [f64; 2] {
+    if det > 0.05 {
+        [
+            x[0] + (j[2] * r[0] - j[1] * r[1]) / det,
+            x[1] + (j[0] * r[1] - j[1] * r[0]) / det,
+        ]
+    } else {
+        [x[0] + r[0], x[1] + r[1]]
+    }
 }
 
 /// F at one point, and the nominal position of the surface point over it.
@@ -84,37 +112,40 @@ impl Implicit<'_> {
     /// most `lip` times the residual: [`Implicit::lip`]), which a march needs, not a root.
     pub fn eval(&self, p: [f64; 3], warm: &mut Option<Warm>) -> Eval {
         let (s, a) = sphere_coords(p, self.earth_radius_m);
+        // the last point's x moved by its Jacobian's inverse times the change in s: a Newton
+        // step taken with the Jacobian already known, so that most evaluations along a march
+        // meet their tolerance at the first read
         let mut x = match warm {
-            Some(w) => [w.x[0] + (s[0] - w.s[0]), w.x[1] + (s[1] - w.s[1])],
+            Some(w) => {
+                let (j, det) = (
+                    w.jacobian,
+                    w.jacobian[0] * w.jacobian[2] - w.jacobian[1] * w.jacobian[1],
+                );
+                newton_step(w.x, [s[0] - w.s[0], s[1] - w.s[1]], j, det)
+            }
             None => s,
         };
         let mut alt = 0.0;
         let mut converged = false;
+        let mut jac = [1.0, 0.0, 1.0];
         for k in 0..=MAX_NEWTON {
             let (f, sq, aq) = self.surface(x);
             alt = aq;
             let r = [s[0] - sq[0], s[1] - sq[1]];
             let res = r[0].abs() + r[1].abs();
             converged = res <= TOL_S || res * self.lip <= 0.1 * (a - aq).abs();
+            let (j, det) = jacobian(&f);
+            jac = j;
             if converged || k == MAX_NEWTON {
                 break;
             }
-            let (a11, b, a22) = (
-                1.0 + f[field::DDX_DX] as f64,
-                f[field::DDX_DZ] as f64,
-                1.0 + f[field::DDZ_DZ] as f64,
-            );
-            let det = a11 * a22 - b * b;
-            if det > 0.05 {
-                x[0] += (a22 * r[0] - b * r[1]) / det;
-                x[1] += (a11 * r[1] - b * r[0]) / det;
-            } else {
-                // a fold's neighbourhood: the fixed-point step
-                x[0] += r[0];
-                x[1] += r[1];
-            }
+            x = newton_step(x, r, j, det);
         }
-        *warm = Some(Warm { s, x });
+        *warm = Some(Warm {
+            s,
+            x,
+            jacobian: jac,
+        });
         Eval {
             f: a - alt,
             x,
