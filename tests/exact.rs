@@ -77,7 +77,8 @@ mod cross {
         use vastocean::accel::embree::{BuildOptions, Device, ExactScene};
         let ocean = sea();
         let mesh = coarse(&ocean);
-        let surface = || ExactSurface::new(ocean.clone(), [0.0, 0.0], EARTH_RADIUS_M).unwrap();
+        let surface =
+            || ExactSurface::new(ocean.clone(), [0.0, 0.0], EARTH_RADIUS_M, false).unwrap();
         let rust = Exact::build(mesh.clone(), surface());
         let device = Device::new(2).unwrap();
         let embree = ExactScene::new(&device, mesh, surface(), BuildOptions::default()).unwrap();
@@ -102,6 +103,55 @@ mod cross {
         assert!(worst < 1e-4, "t differs by {worst} of itself");
         // every camera ray, and some of the rising ones (the next wave)
         assert!(hits > 205, "{hits} of 400 rays hit");
+        assert!(embree.take_error().is_none());
+    }
+    /// With the levels held (filtered normals), both backends find the same hits on random
+    /// surfaces of them: each layer read from one of its levels, or left out.
+    #[test]
+    fn both_backends_find_the_same_hits_on_the_levels_surfaces() {
+        use vastocean::accel::embree::{BuildOptions, Device, ExactScene};
+        use vastocean::ocean::slopes::{ALL_WAVES, NOT_READ};
+        let ocean = sea();
+        let mesh = coarse(&ocean);
+        let surface =
+            || ExactSurface::new(ocean.clone(), [0.0, 0.0], EARTH_RADIUS_M, true).unwrap();
+        let rust = Exact::build(mesh.clone(), surface());
+        let device = Device::new(2).unwrap();
+        let embree = ExactScene::new(&device, mesh, surface(), BuildOptions::default()).unwrap();
+        let levels = ocean.levels();
+        let mut rng = Rng::keyed(&[21]);
+        let rays = rays(300, 2);
+        let lods: Vec<_> = rays
+            .iter()
+            .map(|_| {
+                let mut lod = ALL_WAVES;
+                for (i, l) in lod.iter_mut().enumerate().take(ocean.layers().len()) {
+                    let pick = (rng.f64() * (levels.count(i) + 2) as f64) as usize;
+                    *l = if pick > levels.count(i) {
+                        NOT_READ
+                    } else {
+                        pick as u8
+                    };
+                }
+                lod
+            })
+            .collect();
+        let (mut a, mut b) = (vec![None; rays.len()], vec![None; rays.len()]);
+        rust.intersect_many_at(&rays, &lods, &mut a);
+        embree.intersect_many_at(&rays, &lods, &mut b);
+        let mut hits = 0;
+        for ((ray, lod), (a, b)) in rays.iter().zip(&lods).zip(a.iter().zip(&b)) {
+            match (a, b) {
+                (None, None) => {}
+                (Some(a), Some(b)) => {
+                    hits += 1;
+                    let rel = (a.t as f64 - b.t as f64).abs() / (a.t as f64).max(1.0);
+                    assert!(rel < 1e-4, "t {} against {} on {ray:?} ({lod:?})", a.t, b.t);
+                }
+                (a, b) => panic!("rust {a:?}, embree {b:?} on {ray:?} ({lod:?})"),
+            }
+        }
+        assert!(hits > 120, "{hits} of 300 rays hit");
         assert!(embree.take_error().is_none());
     }
 }
@@ -154,6 +204,28 @@ fn an_exact_render_has_no_nans_holes_or_self_hits() {
     assert!(
         events > 0 && (events as f64) < 0.01 * hits,
         "{events} of {hits}"
+    );
+}
+
+/// Filtered normals on the exact surface: each path meets the surface of the waves its
+/// footprint resolves, with no NaN, hole or self-hit, and its rough hits take the lobe.
+#[test]
+fn a_filtered_exact_render_meets_the_resolved_waves() {
+    let mut cfg = small_scene(SurfaceKind::Exact);
+    cfg.render.normals = NormalMode::Filtered;
+    cfg.validate().unwrap();
+    let r = vastocean::render::pipeline::render_scene(&cfg, false)
+        .unwrap()
+        .report;
+    assert_eq!(r.backend, "rust-exact");
+    assert_eq!(r.nan_count, 0);
+    assert_eq!(r.escaped_below_horizon, 0);
+    assert_eq!(r.self_hits, 0);
+    assert!(r.counters.hits > 1000);
+    assert!(
+        r.counters.rough_hits > 100,
+        "{} rough hits",
+        r.counters.rough_hits
     );
 }
 

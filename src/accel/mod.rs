@@ -15,6 +15,7 @@ pub mod embree;
 pub mod exact;
 
 use crate::mesh::Mesh;
+use crate::ocean::slopes::LevelSet;
 
 /// A rayon pool of `threads` workers (0 = all cores) for building and tracing. With Embree,
 /// every worker sets flush-to-zero and denormals-are-zero first, as Embree asks of every thread
@@ -84,6 +85,14 @@ pub trait Accel: Send + Sync {
             *h = self.intersect(r);
         }
     }
+    /// [`Accel::intersect_many`] with each ray meeting the surface of the layers' levels
+    /// `lods[i]` ([`crate::ocean::slopes::LevelSet`]): the exact surface of a filtered render,
+    /// where each path meets the waves its footprint resolves. A backend with one surface (a
+    /// mesh, or the exact surface without levels) ignores `lods`.
+    fn intersect_many_at(&self, rays: &[Ray], lods: &[LevelSet], hits: &mut [Option<Hit>]) {
+        debug_assert_eq!(rays.len(), lods.len(), "one surface per ray");
+        self.intersect_many(rays, hits)
+    }
     /// The mesh being traced.
     fn mesh(&self) -> &Mesh;
     /// Texture coordinate (nominal horizontal position) interpolated at a hit.
@@ -97,10 +106,11 @@ pub trait Accel: Send + Sync {
     fn exact_surface(&self) -> bool {
         false
     }
-    /// For [`Accel::exact_surface`] backends: the unit geometric normal of the surface at a
-    /// hit (the displaced surface's own tangent plane, air side up), in place of a triangle's,
-    /// and how far from the surface the hit point may lie beyond its f32 rounding, m.
-    fn surface_normal(&self, _hit: &Hit) -> Option<([f32; 3], f32)> {
+    /// For [`Accel::exact_surface`] backends: the unit geometric normal of the surface `lod`
+    /// at a hit on it (the displaced surface's own tangent plane, air side up), in place of a
+    /// triangle's, and how far from the surface the hit point may lie beyond its f32
+    /// rounding, m.
+    fn surface_normal(&self, _hit: &Hit, _lod: &LevelSet) -> Option<([f32; 3], f32)> {
         None
     }
     /// Short name for reports ("embree", "brute", ...).

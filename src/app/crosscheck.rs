@@ -109,8 +109,13 @@ pub fn run(job: &CrosscheckJob) -> Result<CrosscheckReport, AppError> {
         SurfaceKind::Mesh => crosscheck(Arc::new(mesh), &rays, job.threads)?,
         SurfaceKind::Exact => {
             let surface = || {
-                ExactSurface::new(ocean.clone(), cfg.camera.position_m, lod.earth_radius_m)
-                    .expect("a scene that validated has bilinear reads")
+                ExactSurface::new(
+                    ocean.clone(),
+                    cfg.camera.position_m,
+                    lod.earth_radius_m,
+                    false,
+                )
+                .expect("a scene that validated has bilinear reads")
             };
             crosscheck_exact(Arc::new(mesh), surface, &rays, job.threads)?
         }

@@ -30,8 +30,8 @@ pub enum BenchCommand {
         #[arg(long)]
         filtered: bool,
         /// Also render the exact surface (docs/exact.md) inside paper-low's prisms, with mapped
-        /// normals, at the sweep's samples per pixel up to 64: a fourth group (slow: some
-        /// 7 minutes more at 1024 px).
+        /// normals (and with filtered ones under --filtered), at the sweep's samples per pixel
+        /// up to 64: a group each (slow: some 7 minutes more at 1024 px for mapped normals).
         #[arg(long)]
         exact: bool,
         /// What to do when a shading normal would send a ray to the wrong side of its triangle,

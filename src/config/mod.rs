@@ -336,11 +336,14 @@ impl SceneConfig {
             ));
         }
         if r.surface == render::SurfaceKind::Exact {
-            if !matches!(r.normals, NormalMode::Mapped | NormalMode::Geometric) {
+            if !matches!(
+                r.normals,
+                NormalMode::Mapped | NormalMode::Geometric | NormalMode::Filtered
+            ) {
                 return Err(invalid(
                     "render.normals",
-                    "mapped or geometric with render.surface = \"exact\" (the layers' normal, \
-                     or the surface's own tangent plane, at the point hit)",
+                    "mapped, filtered or geometric with render.surface = \"exact\" (the \
+                     layers' normal, or the surface's own tangent plane, at the point hit)",
                     r.normals,
                 ));
             }

@@ -10,7 +10,7 @@ use rustfft::FftPlanner;
 
 use super::Interp;
 use super::layer::{FIELD_COUNT, FieldPlanes, Layer, Texel, add_texel, slopes};
-use super::slopes::{MIN_RESOLVED_SHARE, NOT_READ, Split};
+use super::slopes::{LevelSet, MIN_RESOLVED_SHARE, NOT_READ, Split};
 use super::surface::{Sampler, normal_from_slopes};
 
 /// The coarsest level's grid, texels a side.
@@ -83,6 +83,31 @@ impl<'a> Sampler<'a> {
     fn levels_of(&self) -> &'a Levels {
         self.levels
             .expect("a split past a layer's own texels needs a sampler with_levels")
+    }
+
+    /// [`Sampler::fields_f64`] of the surface `levels`: layer i read from its level
+    /// `levels[i]` alone (at the grid coordinates [`Sampler::normals_split`] reads it at), or
+    /// left out. With every level 0, bit for bit [`Sampler::fields_f64`]. A level past 0 needs
+    /// a sampler [`Sampler::with_levels`].
+    #[inline]
+    pub fn fields_f64_at(&self, u: f64, v: f64, levels: &LevelSet) -> Texel {
+        let mut f = [0.0f32; FIELD_COUNT];
+        for (i, (layer, o)) in self.layers.iter().zip(&self.origin).enumerate() {
+            let l = levels[i];
+            if l == NOT_READ {
+                continue;
+            }
+            let inv = layer.inv_dx();
+            let (px, pz) = (o[0] + u * inv, o[1] + v * inv);
+            if l == 0 {
+                add_texel(&mut f, &layer.read(px, pz, self.interp));
+            } else {
+                let scale = 0.5f64.powi(l as i32);
+                let level = self.levels_of().level(i, l as usize);
+                add_texel(&mut f, &level.read(px * scale, pz * scale, self.interp));
+            }
+        }
+        f
     }
 
     /// The unit normals at the points `uv` with each layer read as `split[i]` says for point

@@ -53,6 +53,13 @@ pub const MIN_RESOLVED_SHARE: f64 = 1e-3;
 /// A layer [`Split::levels`] leaves out.
 pub const NOT_READ: u8 = u8::MAX;
 
+/// One surface of the layers' levels: per layer, the level it is read from alone (0 its own
+/// texels, l > 0 its l-th low-passed level, [`NOT_READ`] left out).
+pub type LevelSet = [u8; MAX_LAYERS];
+
+/// Every layer read from its own texels: the whole sea.
+pub const ALL_WAVES: LevelSet = [0; MAX_LAYERS];
+
 /// A 2 x 2 slope covariance (xx, xz, zz), m^0.
 pub type Cov = [f64; 3];
 
@@ -427,6 +434,51 @@ impl SurfaceSlopes {
                 (a as u8, t)
             };
             let u = l.unresolved(a, t as f64);
+            for c in 0..3 {
+                cov[c] += u[c];
+            }
+        }
+        s.cov = cov.map(|v| v as f32);
+        s
+    }
+}
+
+impl SurfaceSlopes {
+    /// One surface for a footprint of std `sigma_m`, where [`Self::split`] blends two levels
+    /// of each layer: each layer read whole from one of them, the coarser where `u` (uniform
+    /// in [0, 1), one number for every layer) falls below its blend weight, so that on average
+    /// over `u` each level counts with the split's weight. The exact surface meets one surface
+    /// per path ([`crate::accel::exact`]), which a blend of two is not.
+    pub fn drawn_levels(&self, sigma_m: f32, u: f32) -> LevelSet {
+        let mut levels = ALL_WAVES;
+        if sigma_m.is_nan() || sigma_m <= 0.0 {
+            return levels;
+        }
+        for (level, l) in levels.iter_mut().zip(&self.layers) {
+            let x = l.level_coordinate(sigma_m);
+            // (x is finite and at least 0: floored by truncation, as in `split`)
+            let a = x as u32;
+            let a = a as usize + usize::from(u < x - a as f32);
+            *level = if a > l.levels() { NOT_READ } else { a as u8 };
+        }
+        levels
+    }
+
+    /// What the surface `levels` resolves, as a split without blends: those levels, and the
+    /// slope covariance of the waves they leave out.
+    pub fn split_of(&self, levels: &LevelSet) -> Split {
+        let mut s = Split {
+            levels: *levels,
+            ..Split::RESOLVED
+        };
+        let mut cov = [0.0f64; 3];
+        for (&level, l) in levels.iter().zip(&self.layers) {
+            let a = if level == NOT_READ {
+                l.levels() + 1
+            } else {
+                level as usize
+            };
+            let u = l.unresolved(a, 0.0);
             for c in 0..3 {
                 cov[c] += u[c];
             }

@@ -27,6 +27,7 @@ use super::water::{fresnel, reflect, refract};
 use crate::accel::{Hit, Ray};
 use crate::color::luminance;
 use crate::config::{FilterLobe, WrongSide};
+use crate::ocean::slopes::LevelSet;
 use crate::rng::Rng;
 use crate::sky::SunLight;
 
@@ -88,6 +89,8 @@ pub(super) struct HitShading {
     pub(super) rough: Unresolved,
     /// The footprint's width at the hit, m.
     pub(super) width_m: f32,
+    /// The surface of the layers' levels the hit lies on (the exact surface).
+    pub(super) lod: LevelSet,
     /// The path's segment (its depth) at this hit.
     pub(super) segment: u32,
 }
@@ -112,7 +115,7 @@ impl SceneRef<'_> {
         out: &'s mut MaybeUninit<Scatter>,
     ) -> &'s mut Scatter {
         let d = Vec3::from(ray.dir);
-        let sp = if let Some((ng, error_m)) = self.accel.surface_normal(hit) {
+        let sp = if let Some((ng, error_m)) = self.accel.surface_normal(hit, &shading.lod) {
             exact_surface_point(ray, hit, Vec3::from(ng), error_m)
         } else {
             surface_point(self.accel.mesh(), hit)

@@ -25,7 +25,7 @@ pub use super::counters::Counters;
 pub use super::earth_tilt::{tilt_to_earth, tilt_to_earth_many};
 use super::footprint;
 pub use super::interface::{bend_normal, spawn_ray};
-use super::normals::Unresolved;
+use super::normals::{Footprints, Unresolved};
 use super::objects::ObjectScatter;
 use super::shortcuts::Untraced;
 pub use super::shortcuts::{highest_vertex_y, hit_on_triangle, max_slope};
@@ -34,7 +34,7 @@ use crate::accel::{Accel, Hit, Ray};
 use crate::config::{FilterLobe, NormalMode, SceneConfig, Water, WrongSide};
 use crate::objects::SceneObjects;
 use crate::ocean::Sampler;
-use crate::ocean::slopes::SurfaceSlopes;
+use crate::ocean::slopes::{ALL_WAVES, LevelSet, SurfaceSlopes};
 use crate::rng::Rng;
 use crate::sky::{Sky, SunLight};
 
@@ -146,7 +146,14 @@ impl SceneRef<'_> {
         };
         let (mut n, mut rough) = ([Vec3::Y], [Unresolved::NONE]);
         let c = &mut Counters::default();
-        self.shading_normals(&[Some(*hit)], &[width_m], &settings, c, &mut n, &mut rough);
+        self.shading_normals(
+            &[Some(*hit)],
+            Footprints::Widths(&[width_m]),
+            &settings,
+            c,
+            &mut n,
+            &mut rough,
+        );
         (n[0], rough[0].cov)
     }
 
@@ -168,6 +175,7 @@ impl SceneRef<'_> {
             in_water,
             in_object: false,
             width_m: 0.0,
+            lod: ALL_WAVES,
             sun_pdf: 0.0,
         };
         let mut out = [Vec3::ZERO];
@@ -209,6 +217,37 @@ impl SceneRef<'_> {
         self.accel.intersect(ray).map(|h| h.prim)
     }
 
+    /// Whether paths meet the exact surface of the waves their footprints resolve: filtered
+    /// normals on the exact surface.
+    fn exact_lods(&self, settings: &TraceSettings) -> bool {
+        settings.normals == NormalMode::Filtered
+            && self.slopes.is_some()
+            && self.accel.exact_surface()
+    }
+
+    /// The surface a camera ray's path meets ([`Self::exact_lods`]; every wave otherwise):
+    /// the levels of the footprint where the ray meets the mean sea (the earth's sphere; where
+    /// it passes above it, at its closest approach), one of each layer's two drawn with the
+    /// blend's weight by a number from the path's `rng` ([`SurfaceSlopes::drawn_levels`]).
+    /// The hit itself lies a wave's height nearer or farther, where the footprint is that much
+    /// narrower or wider. Its later segments keep it: a ray leaving a hit starts on that
+    /// surface, and another surface would lie above or below its origin.
+    fn camera_lod(&self, ray: &Ray, settings: &TraceSettings, rng: &mut Rng) -> LevelSet {
+        let Some(slopes) = self.slopes.filter(|_| self.exact_lods(settings)) else {
+            return ALL_WAVES;
+        };
+        let r = self.earth_radius_m;
+        let [ox, oy, oz] = ray.org.map(f64::from);
+        let d = Vec3::from(ray.dir).normalize_or(Vec3::NEG_Y).as_dvec3();
+        // |o + t d - c| = r, c the sphere's centre (0, -r, 0): t^2 + 2 b t + q = 0
+        let b = ox * d.x + (oy + r) * d.y + oz * d.z;
+        let q = ox * ox + oz * oz + oy * (oy + 2.0 * r);
+        let disc = b * b - q;
+        let t = if disc >= 0.0 { -b - disc.sqrt() } else { -b };
+        let sigma = footprint::width_at(0.0, settings, t.max(0.0) as f32) * settings.filter_width;
+        slopes.drawn_levels(sigma, rng.f32())
+    }
+
     /// Radiance along camera rays (in the air, first segment), computed together: see
     /// [`Self::radiance_batch`]. At most [`CAMERA_BATCH`] rays; `rngs[i]` is ray i's generator
     /// and `out[i]` receives its radiance. `predicted`: the pixel's triangle from
@@ -228,7 +267,12 @@ impl SceneRef<'_> {
         let n = rays.len();
         assert!(n <= CAMERA_BATCH && rngs.len() == n && out.len() == n);
         let mut entries = [PathVertex::NONE; CAMERA_BATCH];
-        for (i, (e, ray)) in entries.iter_mut().zip(rays).enumerate() {
+        for (i, ((e, ray), rng)) in entries
+            .iter_mut()
+            .zip(rays)
+            .zip(rngs.iter_mut())
+            .enumerate()
+        {
             *e = PathVertex {
                 ray: *ray,
                 sample: i as u8,
@@ -236,6 +280,7 @@ impl SceneRef<'_> {
                 in_water: false,
                 in_object: false,
                 width_m: 0.0,
+                lod: self.camera_lod(ray, settings, rng),
                 sun_pdf: 0.0,
             };
         }
@@ -285,6 +330,7 @@ impl SceneRef<'_> {
         let mut n_object = 0;
         // Answered without the BVH, from the sky (all together), or traced together.
         let mut traced = [PathVertex::NONE.ray; CAMERA_BATCH];
+        let mut traced_lod = [ALL_WAVES; CAMERA_BATCH];
         let mut traced_entry = [0u8; CAMERA_BATCH];
         let mut m = 0;
         // the entries that see the sky: the untraced ones here, the misses below, looked up
@@ -311,6 +357,7 @@ impl SceneRef<'_> {
                 (Untraced::Sky, None) => sky_entry.push(k as u8),
                 (Untraced::Trace, object) => {
                     traced[m] = e.ray;
+                    traced_lod[m] = e.lod;
                     if let Some(h) = object {
                         // the sea's hit counts only in front of the object's
                         traced[m].tfar = traced[m].tfar.min(h.t);
@@ -325,7 +372,12 @@ impl SceneRef<'_> {
             return;
         }
         let mut hits = [None; CAMERA_BATCH];
+        let exact_lods = self.exact_lods(settings);
         match predicted {
+            None if exact_lods => {
+                self.accel
+                    .intersect_many_at(&traced[..m], &traced_lod[..m], &mut hits[..m])
+            }
             None => self.accel.intersect_many(&traced[..m], &mut hits[..m]),
             Some(prim) => {
                 // Rays that meet the predicted triangle steeply enough have their hit; the
@@ -383,7 +435,11 @@ impl SceneRef<'_> {
         let mut rough = [Unresolved::NONE; CAMERA_BATCH];
         self.shading_normals(
             &hits[..m],
-            &widths[..m],
+            if exact_lods {
+                Footprints::Levels(&traced_lod[..m])
+            } else {
+                Footprints::Widths(&widths[..m])
+            },
             settings,
             c,
             &mut normals[..m],
@@ -417,6 +473,7 @@ impl SceneRef<'_> {
                         normal: normals[i],
                         rough: rough[i],
                         width_m: widths[i],
+                        lod: e.lod,
                         segment,
                     };
                     let rng = &mut rngs[e.sample as usize];
@@ -459,7 +516,19 @@ impl SceneRef<'_> {
         for (sun, (_, o)) in suns[n_shaded..].iter_mut().zip(objects) {
             *sun = o.sun;
         }
-        let direct = self.sun_through(&suns[..n_shaded + n_object], c);
+        let mut sun_lods = [ALL_WAVES; CAMERA_BATCH];
+        for (lod, k) in sun_lods
+            .iter_mut()
+            .zip(shaded_k.iter().chain(objects.iter().map(|o| &o.0)))
+        {
+            *lod = entries[*k as usize].lod;
+        }
+        let direct = self.sun_through(
+            &suns[..n_shaded + n_object],
+            &sun_lods[..n_shaded + n_object],
+            exact_lods,
+            c,
+        );
 
         // The branches: which each hit follows (drawing a sample's random choice here, before
         // its subtrees), then each batch of branches in turn.
@@ -491,6 +560,7 @@ impl SceneRef<'_> {
                     in_water: bounce.in_water,
                     in_object: bounce.in_object,
                     width_m: o.width_m,
+                    lod: entries[*k as usize].lod,
                     sun_pdf: bounce.sun_pdf,
                 };
                 of[b] = (n_shaded + jo) as u8;
@@ -505,6 +575,7 @@ impl SceneRef<'_> {
                         in_water,
                         in_object: false,
                         width_m: s.width_m,
+                        lod: entries[*k as usize].lod,
                         sun_pdf,
                     };
                     of[b] = j as u8;
@@ -556,6 +627,9 @@ pub(super) struct PathVertex {
     in_object: bool,
     /// The ray's footprint width at its origin, m (it grows by the pixel's spread per metre).
     width_m: f32,
+    /// The surface of the layers' levels the path meets on the exact surface of a filtered
+    /// render (drawn for its camera ray: [`SceneRef::camera_lod`]); every wave otherwise.
+    lod: LevelSet,
     /// The density with which a rough hit that sampled the sun chose this ray's direction: the
     /// sun the ray sees directly is weighed against the sun's own samples (0: full weight).
     pub(super) sun_pdf: f32,
@@ -574,6 +648,7 @@ impl PathVertex {
         in_water: false,
         in_object: false,
         width_m: 0.0,
+        lod: ALL_WAVES,
         sun_pdf: 0.0,
     };
 }

@@ -14,7 +14,7 @@ use super::interface::surface_point;
 use crate::accel::Hit;
 use crate::config::NormalMode;
 use crate::mesh::Mesh;
-use crate::ocean::slopes::Split;
+use crate::ocean::slopes::{ALL_WAVES, LevelSet, Split};
 
 /// What filtered normals leave to the lobe at a hit: the unresolved waves' slope covariance
 /// (xx, xz, zz) in the flat sea's axes, and the local vertical, from which those slopes (and
@@ -33,20 +33,32 @@ impl Unresolved {
     };
 }
 
+/// What each hit of a batch resolves, for filtered normals.
+#[derive(Clone, Copy)]
+pub(super) enum Footprints<'a> {
+    /// The footprint's width at each hit, m (a mesh: the waves it resolves are read there).
+    Widths(&'a [f32]),
+    /// The surface of the layers' levels each hit lies on (the exact surface: the waves it
+    /// holds are the resolved ones).
+    Levels(&'a [LevelSet]),
+}
+
 impl SceneRef<'_> {
     /// The shading normals (air side up) at a batch of hits into `out` (a miss's entry is
     /// not used: left as it is, or +y).
     /// Mapped normals: each hit's texture coordinate, the ocean's normals there computed
     /// together ([`Sampler::normals`], bit for bit one at a time), tilted to the curved earth.
     /// Filtered normals: the same, each layer read from the low-passed levels that the hit's
-    /// footprint (`widths[i]` metres across) resolves, and the slopes of the rest into `rough`
-    /// ([`crate::ocean::slopes::SurfaceSlopes::split`]; left as it is for other modes).
+    /// footprint resolves, and the slopes of the rest into `rough`
+    /// ([`crate::ocean::slopes::SurfaceSlopes::split`]; left as it is for other modes); on
+    /// the exact surface, the levels of the surface hit, and what they leave out
+    /// ([`crate::ocean::slopes::SurfaceSlopes::split_of`]).
     /// One call in 64 is timed alone, one timed with a second evaluation of the same normals
     /// (see [`Counters::normal_map_thread_seconds`]).
     pub(super) fn shading_normals(
         &self,
         hits: &[Option<Hit>],
-        widths: &[f32],
+        footprints: Footprints,
         settings: &TraceSettings,
         c: &mut Counters,
         out: &mut [Vec3],
@@ -78,9 +90,15 @@ impl SceneRef<'_> {
                     for (j, &i) in at[..n].iter().enumerate() {
                         let i = i as usize;
                         let h = hits[i].expect("a hit's entry");
-                        let tri = mesh.indices()[h.prim as usize].map(|v| mesh.uvs()[v as usize]);
-                        let sigma = (widths[i] * settings.filter_width).min(mesh_sigma(tri));
-                        splits[j] = slopes.split(sigma);
+                        splits[j] = match footprints {
+                            Footprints::Levels(lods) => slopes.split_of(&lods[i]),
+                            Footprints::Widths(widths) => {
+                                let tri =
+                                    mesh.indices()[h.prim as usize].map(|v| mesh.uvs()[v as usize]);
+                                slopes
+                                    .split((widths[i] * settings.filter_width).min(mesh_sigma(tri)))
+                            }
+                        };
                         rough[i] = Unresolved {
                             cov: splits[j].cov,
                             up: ups[j],
@@ -132,7 +150,7 @@ impl SceneRef<'_> {
             (NormalMode::Geometric, _) => {
                 for (o, h) in out.iter_mut().zip(hits) {
                     if let Some(h) = h {
-                        *o = match self.accel.surface_normal(h) {
+                        *o = match self.accel.surface_normal(h, &ALL_WAVES) {
                             Some((n, _)) => Vec3::from(n).normalize_or(Vec3::Y),
                             None => surface_point(mesh, h).ng,
                         };

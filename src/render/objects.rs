@@ -19,6 +19,7 @@ use super::interface::{SurfacePoint, surface_point_on};
 use super::microfacet::power_heuristic;
 use crate::accel::{Hit, Ray};
 use crate::config::Material;
+use crate::ocean::slopes::{ALL_WAVES, LevelSet};
 use crate::rng::Rng;
 use std::f32::consts::FRAC_1_PI;
 
@@ -257,10 +258,13 @@ impl SceneRef<'_> {
     pub(super) fn sun_through(
         &self,
         suns: &[Option<(Ray, Vec3)>],
+        lods: &[LevelSet],
+        exact_lods: bool,
         c: &mut Counters,
     ) -> [Vec3; CAMERA_BATCH] {
         let mut direct = [Vec3::ZERO; CAMERA_BATCH];
         let mut rays = [Ray::new([0.0; 3], [0.0, 1.0, 0.0]); CAMERA_BATCH];
+        let mut ray_lods = [ALL_WAVES; CAMERA_BATCH];
         let mut of = [0u8; CAMERA_BATCH];
         let mut n = 0;
         let mut all = [Ray::new([0.0; 3], [0.0, 1.0, 0.0]); CAMERA_BATCH];
@@ -281,6 +285,7 @@ impl SceneRef<'_> {
                             .is_some_and(|k| d.y > k * (d.x * d.x + d.z * d.z).sqrt()));
                 if !clear {
                     rays[n] = ray;
+                    ray_lods[n] = lods[j];
                     of[n] = j as u8;
                     n += 1;
                 }
@@ -289,7 +294,13 @@ impl SceneRef<'_> {
         if n > 0 {
             c.sun_rays += n as u64;
             let mut hits = [None; CAMERA_BATCH];
-            self.accel.intersect_many(&rays[..n], &mut hits[..n]);
+            if exact_lods {
+                // (a sun ray leaves its hit's surface, which is its path's)
+                self.accel
+                    .intersect_many_at(&rays[..n], &ray_lods[..n], &mut hits[..n]);
+            } else {
+                self.accel.intersect_many(&rays[..n], &mut hits[..n]);
+            }
             for (&j, h) in of[..n].iter().zip(&hits[..n]) {
                 if h.is_some() {
                     c.sun_occluded += 1;

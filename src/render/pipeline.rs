@@ -250,7 +250,12 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
                 let t = Instant::now();
                 let surface = pool
                     .install(|| {
-                        ExactSurface::new(ocean.clone(), cfg.camera.position_m, lod.earth_radius_m)
+                        ExactSurface::new(
+                            ocean.clone(),
+                            cfg.camera.position_m,
+                            lod.earth_radius_m,
+                            cfg.render.normals == crate::config::NormalMode::Filtered,
+                        )
                     })
                     .map_err(RenderError::Exact)?;
                 let pyramids_s = t.elapsed().as_secs_f64();

@@ -1,7 +1,7 @@
 //! The exact ocean surface on Embree: the coarse triangles' prisms as user geometry, whose
 //! bounds and intersect callbacks (through the shim) are [`crate::accel::exact`]'s. Embree
 //! builds its BVH over the prisms' boxes and calls the intersect callback for each prism a ray
-//! meets; the ray's searched stretch ([`Searched`]) travels with it in the query context, so
+//! meets; the ray's search ([`Query`]: the surface it meets, the stretch searched) rides in the query context, so
 //! overlapping prisms do not search one stretch twice.
 
 use std::ffi::{c_int, c_void};
@@ -11,9 +11,10 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use super::{BuildOptions, Device, EmbreeError, error_name, ffi};
-use crate::accel::exact::{ExactSurface, Searched, prisms_of, top_of};
+use crate::accel::exact::{ExactSurface, Query, prisms_of, top_of};
 use crate::accel::{Accel, Hit, Ray};
 use crate::mesh::Mesh;
+use crate::ocean::slopes::{ALL_WAVES, LevelSet};
 
 /// What the callbacks read: the surface, the prisms and the triangles' texture coordinates.
 struct Prisms {
@@ -63,21 +64,24 @@ unsafe extern "C" fn intersect(
     v: *mut f32,
 ) -> c_int {
     // SAFETY: as in `bounds`; `ray` has `Ray`'s layout (checked in the parent module); `query`
-    // is null or the `Searched` of this ray, owned by the thread tracing it; t, u, v are
+    // is null or the `Query` of this ray, owned by the thread tracing it; t, u, v are
     // writable floats.
     unsafe {
         let d = &*(user as *const Prisms);
         let ray = &*(ray as *const Ray);
-        let mut fresh = Searched::default();
-        let searched = match (query as *mut Searched).as_mut() {
-            Some(s) => s,
-            None => &mut fresh,
+        let mut fresh;
+        let query = match (query as *mut Query).as_mut() {
+            Some(q) => q,
+            None => {
+                fresh = d.surface.query(&ALL_WAVES);
+                &mut fresh
+            }
         };
         let (uvs, idx) = (d.mesh.uvs(), d.mesh.indices());
         let tri = idx[prim as usize].map(|k| uvs[k as usize]);
         match d
             .surface
-            .intersect_prism(ray, tri, &d.prisms[prim as usize], ray.tfar, searched)
+            .intersect_prism(ray, tri, &d.prisms[prim as usize], ray.tfar, query)
         {
             Some((th, uh, vh)) => {
                 (*t, *u, *v) = (th, uh, vh);
@@ -173,22 +177,23 @@ impl ExactScene {
     }
 }
 
-impl Accel for ExactScene {
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+impl ExactScene {
+    /// The closest hit of `ray` on the surface `lod`.
+    fn intersect_at(&self, ray: &Ray, lod: &LevelSet) -> Option<Hit> {
         if !ray.is_finite() {
             self.rejected.fetch_add(1, Ordering::Relaxed);
             return None;
         }
         let mut h = ffi::vo_hit::default();
-        let mut searched = Searched::default();
-        // SAFETY: Ray has vo_ray's layout; the scene is committed; `searched` outlives the
-        // call, which hands it to this thread's callbacks only.
+        let mut query = self.data.surface.query(lod);
+        // SAFETY: Ray has vo_ray's layout; the scene is committed; `query` outlives the call,
+        // which hands it to this thread's callbacks only.
         unsafe {
             ffi::vo_intersect1_query(
                 self.raw.as_ptr(),
                 ray as *const Ray as *const ffi::vo_ray,
                 &mut h,
-                &mut searched as *mut Searched as *mut c_void,
+                &mut query as *mut Query as *mut c_void,
             )
         };
         (h.prim != ffi::VO_INVALID_ID).then_some(Hit {
@@ -197,6 +202,19 @@ impl Accel for ExactScene {
             u: h.u,
             v: h.v,
         })
+    }
+}
+
+impl Accel for ExactScene {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.intersect_at(ray, &ALL_WAVES)
+    }
+
+    fn intersect_many_at(&self, rays: &[Ray], lods: &[LevelSet], hits: &mut [Option<Hit>]) {
+        assert!(rays.len() == hits.len() && lods.len() == rays.len());
+        for ((r, lod), h) in rays.iter().zip(lods).zip(hits.iter_mut()) {
+            *h = self.intersect_at(r, lod);
+        }
     }
 
     fn mesh(&self) -> &Mesh {
@@ -211,10 +229,10 @@ impl Accel for ExactScene {
         true
     }
 
-    fn surface_normal(&self, hit: &Hit) -> Option<([f32; 3], f32)> {
+    fn surface_normal(&self, hit: &Hit, lod: &LevelSet) -> Option<([f32; 3], f32)> {
         let s = &self.data.surface;
-        let n = s.normal_at(self.interpolate_uv(hit).map(f64::from));
-        Some((n, s.hit_error_m()))
+        let n = s.normal_at(self.interpolate_uv(hit).map(f64::from), lod);
+        Some((n, s.hit_error_m(lod)))
     }
 
     fn rejected_rays(&self) -> u64 {

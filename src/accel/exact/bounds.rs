@@ -17,6 +17,8 @@
 
 use super::pyramid::{LayerLimits, Pyramid};
 use crate::ocean::Sampler;
+use crate::ocean::levels::Levels;
+use crate::ocean::slopes::{LevelSet, NOT_READ};
 
 /// Slope and strain bounds of the summed surface over a box of nominal positions (or the whole
 /// sea).
@@ -82,30 +84,73 @@ impl SlopeBound {
     }
 }
 
-/// The bounds of every layer of a surface, around one camera origin.
+/// The bounds of every layer of a surface, and of each of its levels, around one camera origin.
 pub(super) struct SurfaceBounds {
-    pyramids: Vec<Pyramid>,
-    pub limits: Vec<LayerLimits>,
+    /// `pyramids[i][l]`: layer i's level l (0 the layer's own texels).
+    pyramids: Vec<Vec<Pyramid>>,
+    /// Their limits, likewise.
+    limits: Vec<Vec<LayerLimits>>,
+    /// Whether a surface may leave a layer out (its levels are held: a footprint past the
+    /// last of them reads none).
+    levels: bool,
 }
 
 impl SurfaceBounds {
-    /// The pyramids of every layer `sampler` reads, around its camera origin. The sampler must
-    /// read bilinearly (the only read whose values stay within their texels').
-    pub fn new(sampler: &Sampler) -> SurfaceBounds {
+    /// The pyramids of every layer `sampler` reads, around its camera origin, and of each of
+    /// its `levels` if given. The sampler must read bilinearly (the only read whose values stay
+    /// within their texels').
+    pub fn new(sampler: &Sampler, levels: Option<&Levels>) -> SurfaceBounds {
         let (pyramids, limits) = sampler
             .layers()
             .iter()
             .zip(sampler.grid_origins())
-            .map(|(l, &o)| Pyramid::new(l, o))
+            .enumerate()
+            .map(|(i, (layer, &o))| {
+                let count = levels.map_or(0, |ls| ls.count(i));
+                (0..=count)
+                    .map(|l| {
+                        let grid = if l == 0 {
+                            layer
+                        } else {
+                            levels.expect("levels").level(i, l)
+                        };
+                        Pyramid::new(grid, o, layer.inv_dx(), 0.5f64.powi(l as i32))
+                    })
+                    .unzip()
+            })
             .unzip();
-        SurfaceBounds { pyramids, limits }
+        SurfaceBounds {
+            pyramids,
+            limits,
+            levels: levels.is_some(),
+        }
     }
 
-    /// The smallest and largest summed h over nominal positions `[x0, x1] x [z0, z1]`, m.
+    /// The pyramids of the grids the surface `lod` reads.
     #[inline]
-    pub fn height(&self, x0: f64, x1: f64, z0: f64, z1: f64) -> [f64; 2] {
+    fn read<'a>(&'a self, lod: &'a LevelSet) -> impl Iterator<Item = &'a Pyramid> + 'a {
+        self.pyramids
+            .iter()
+            .zip(lod)
+            .filter(|(_, l)| **l != NOT_READ)
+            .map(|(p, &l)| &p[l as usize])
+    }
+
+    /// The limits of the grids the surface `lod` reads.
+    fn read_limits<'a>(&'a self, lod: &'a LevelSet) -> impl Iterator<Item = &'a LayerLimits> + 'a {
+        self.limits
+            .iter()
+            .zip(lod)
+            .filter(|(_, l)| **l != NOT_READ)
+            .map(|(p, &l)| &p[l as usize])
+    }
+
+    /// The smallest and largest summed h of the surface `lod` over nominal positions
+    /// `[x0, x1] x [z0, z1]`, m.
+    #[inline]
+    pub fn height(&self, lod: &LevelSet, x0: f64, x1: f64, z0: f64, z1: f64) -> [f64; 2] {
         let (mut b, mut size) = ([0.0f64; 2], 1e-3);
-        for p in &self.pyramids {
+        for p in self.read(lod) {
             let q = p.heights.get(p.blocks(x0, x1, z0, z1));
             b[0] += q[0] as f64;
             b[1] += q[1] as f64;
@@ -117,12 +162,34 @@ impl SurfaceBounds {
         [b[0] - slack, b[1] + slack]
     }
 
-    /// The layers' summed slope and strain bounds over nominal positions
+    /// [`Self::height`] over every surface of the levels held: each layer's range joined over
+    /// its levels (and 0, where a layer may be left out).
+    pub fn height_any(&self, x0: f64, x1: f64, z0: f64, z1: f64) -> [f64; 2] {
+        let (mut b, mut size) = ([0.0f64; 2], 1e-3);
+        for levels in &self.pyramids {
+            let (mut lo, mut hi) = if self.levels {
+                (0.0f32, 0.0f32)
+            } else {
+                (f32::INFINITY, f32::NEG_INFINITY)
+            };
+            for p in levels {
+                let q = p.heights.get(p.blocks(x0, x1, z0, z1));
+                (lo, hi) = (lo.min(q[0]), hi.max(q[1]));
+            }
+            b[0] += lo as f64;
+            b[1] += hi as f64;
+            size += (lo.abs().max(hi.abs())) as f64;
+        }
+        let slack = 1e-6 * size;
+        [b[0] - slack, b[1] + slack]
+    }
+
+    /// The summed slope and strain bounds of the surface `lod` over nominal positions
     /// `[x0, x1] x [z0, z1]`.
     #[inline]
-    pub fn steepness(&self, x0: f64, x1: f64, z0: f64, z1: f64) -> Steepness {
+    pub fn steepness(&self, lod: &LevelSet, x0: f64, x1: f64, z0: f64, z1: f64) -> Steepness {
         let (mut slope, mut strain) = ([0.0; 2], 0.0);
-        for p in &self.pyramids {
+        for p in self.read(lod) {
             let q = p.steep.get(p.blocks(x0, x1, z0, z1));
             // each layer's Gershgorin norm; their sum bounds the summed strain's
             slope[0] += q.slope[0] as f64;
@@ -132,12 +199,12 @@ impl SurfaceBounds {
         Steepness { slope, strain }
     }
 
-    /// The smallest and largest summed Dx and Dz over nominal positions `[x0, x1] x [z0, z1]`,
-    /// m: `[Dx min, Dx max, Dz min, Dz max]`.
+    /// The smallest and largest summed Dx and Dz of the surface `lod` over nominal positions
+    /// `[x0, x1] x [z0, z1]`, m: `[Dx min, Dx max, Dz min, Dz max]`.
     #[inline]
-    pub fn displacement(&self, x0: f64, x1: f64, z0: f64, z1: f64) -> [f64; 4] {
+    pub fn displacement(&self, lod: &LevelSet, x0: f64, x1: f64, z0: f64, z1: f64) -> [f64; 4] {
         let (mut b, mut size) = ([0.0f64; 4], 1e-3);
-        for p in &self.pyramids {
+        for p in self.read(lod) {
             let q = p.disp.get(p.blocks(x0, x1, z0, z1)).0;
             for (s, v) in b.iter_mut().zip(q) {
                 *s += v as f64;
@@ -149,39 +216,57 @@ impl SurfaceBounds {
         [b[0] - slack, b[1] + slack, b[2] - slack, b[3] + slack]
     }
 
-    /// Largest |Dx| and |Dz| of the summed surface, m.
-    pub fn disp(&self) -> [f64; 2] {
+    /// Largest |Dx| and |Dz| of the surface `lod`, m.
+    pub fn disp(&self, lod: &LevelSet) -> [f64; 2] {
         let mut d = [0.0; 2];
-        for l in &self.limits {
+        for l in self.read_limits(lod) {
             d[0] += l.disp[0];
             d[1] += l.disp[1];
         }
         d
     }
 
-    /// Largest |h| of the summed surface, m.
-    pub fn height_limit(&self) -> f64 {
-        self.limits.iter().map(|l| l.height).sum()
+    /// Largest |h| of the surface `lod`, m.
+    pub fn height_limit(&self, lod: &LevelSet) -> f64 {
+        self.read_limits(lod).map(|l| l.height).sum()
     }
 
-    /// The whole sea's slope and strain bounds: each axis's bilinear slope bound summed over
-    /// the layers, and the summed strain's Gershgorin bound (the largest summed diagonal bound
-    /// plus the summed off-diagonal one), which is tighter than a sum of the layers' norms.
-    /// Its [`Steepness::slope_limit`] is `None` where the strain bound reaches 0.95 (the bound
-    /// does not prove the surface is a height field).
-    pub fn sea_steepness(&self) -> Steepness {
-        let slope = std::array::from_fn(|k| self.limits.iter().map(|l| l.slope[k]).sum());
-        let s: [f64; 3] = std::array::from_fn(|k| self.limits.iter().map(|l| l.strain[k]).sum());
+    /// Largest |Dx|, |Dz| and |h| of any surface of the levels held, m.
+    pub fn limits_any(&self) -> ([f64; 2], f64) {
+        let mut d = ([0.0; 2], 0.0);
+        for levels in &self.limits {
+            let most = |f: &dyn Fn(&LayerLimits) -> f64| levels.iter().map(f).fold(0.0, f64::max);
+            d.0[0] += most(&|l| l.disp[0]);
+            d.0[1] += most(&|l| l.disp[1]);
+            d.1 += most(&|l| l.height);
+        }
+        d
+    }
+
+    /// The whole sea's slope and strain bounds for the surface `lod`: each axis's bilinear
+    /// slope bound summed over the grids read, and the summed strain's Gershgorin bound (the
+    /// largest summed diagonal bound plus the summed off-diagonal one), which is tighter than a
+    /// sum of the layers' norms. Its [`Steepness::slope_limit`] is `None` where the strain
+    /// bound reaches 0.95 (the bound does not prove the surface is a height field).
+    pub fn sea_steepness(&self, lod: &LevelSet) -> Steepness {
+        let slope = std::array::from_fn(|k| self.read_limits(lod).map(|l| l.slope[k]).sum());
+        let s: [f64; 3] = std::array::from_fn(|k| self.read_limits(lod).map(|l| l.strain[k]).sum());
         Steepness {
             slope,
             strain: s[0].max(s[1]) + s[2],
         }
     }
 
+    /// The finest texel the surface `lod` reads, m (infinite if it reads none).
+    pub fn finest_texel(&self, lod: &LevelSet) -> f64 {
+        self.read(lod).map(|p| p.dx()).fold(f64::INFINITY, f64::min)
+    }
+
     /// Bytes of the pyramids.
     pub fn bytes(&self) -> usize {
         self.pyramids
             .iter()
+            .flatten()
             .map(|p| p.heights.bytes() + p.steep.bytes() + p.disp.bytes())
             .sum()
     }

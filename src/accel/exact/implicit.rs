@@ -12,6 +12,7 @@
 //! change in s (a ray's next point is close to its last).
 
 use crate::lod::{atan_over_arg, curved_frame_position};
+use crate::ocean::slopes::LevelSet;
 use crate::ocean::{Sampler, field};
 
 /// Newton steps before an inversion gives up (it then answers with the last point reached and
@@ -89,6 +90,8 @@ pub(super) struct Eval {
 #[derive(Clone, Copy)]
 pub(super) struct Implicit<'a> {
     pub sampler: Sampler<'a>,
+    /// The levels the surface reads ([`Sampler::fields_f64_at`]).
+    pub lod: LevelSet,
     pub earth_radius_m: f64,
     /// How much F can change per metre of error in the nominal position found: one plus the
     /// surface's slope bound (infinite without one, so inversions run to [`TOL_S`]).
@@ -99,7 +102,7 @@ impl Implicit<'_> {
     /// The surface point of nominal position `x` and its sphere coordinates.
     #[inline]
     fn surface(&self, x: [f64; 2]) -> (crate::ocean::Texel, [f64; 2], f64) {
-        let f = self.sampler.fields_f64(x[0], x[1]);
+        let f = self.sampler.fields_f64_at(x[0], x[1], &self.lod);
         let v = [f[field::DX] as f64, f[field::H] as f64, f[field::DZ] as f64];
         let q = curved_frame_position(x[0], x[1], v, self.earth_radius_m);
         let (s, a) = sphere_coords(q, self.earth_radius_m);

@@ -29,21 +29,37 @@ use std::time::Instant;
 use super::bvh::BoxTree;
 use super::{Accel, Hit, Ray};
 use crate::mesh::Mesh;
+use crate::ocean::slopes::{ALL_WAVES, LevelSet};
 use crate::ocean::{Interp, Surface};
 use bounds::{Steepness, SurfaceBounds};
 use implicit::Implicit;
 
 /// The displaced surface of an ocean around one camera origin, with the bounds the intersector
-/// needs.
+/// needs; with filtered normals, also the surfaces of the layers' low-passed levels, one of
+/// which each path meets ([`View`]).
 pub struct ExactSurface {
     ocean: Arc<Surface>,
     origin: [f64; 2],
     earth_radius_m: f64,
     bounds: SurfaceBounds,
-    /// The summed layers' largest |Dx| and |Dz|, m.
+    /// The largest |Dx| and |Dz| of any surface a ray may meet, m.
+    prism_disp: [f64; 2],
+    /// The largest |(Dx, h, Dz)| of any of them, m.
+    prism_disp_norm: f64,
+    /// The whole sea's view.
+    all: View,
+    /// Whether rays may meet the levels' surfaces (filtered normals).
+    levels: bool,
+}
+
+/// What the search needs of one surface of the layers' levels ([`LevelSet`]: each layer read
+/// from one of its levels, or left out): its bounds' whole-sea figures and the lengths the
+/// search works at, which grow with the finest texel the surface reads.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct View {
+    lod: LevelSet,
+    /// The surface's largest |Dx| and |Dz|, m.
     disp: [f64; 2],
-    /// The largest |(Dx, h, Dz)|, m.
-    disp_norm: f64,
     /// How far above h a surface point's altitude can be: |D|^2 / 2R (the displacement is
     /// tangent to the sphere at its base), m.
     altitude_slack: f64,
@@ -56,19 +72,52 @@ pub struct ExactSurface {
     /// displacement, the bounds narrow slowly.
     split_m: f64,
     /// ... and, where no slope bound certifies a march, down to this: eight of the finest
-    /// layer's texels.
+    /// texels read.
     split_rough_m: f64,
-    /// The shortest step of the march, m: half the finest layer's texel.
+    /// The shortest step of the march, m: half the finest texel read.
     floor_m: f64,
+    /// The surface's largest |h|, m.
+    height_limit: f64,
+}
+
+impl View {
+    fn new(bounds: &SurfaceBounds, lod: &LevelSet, earth_radius_m: f64) -> View {
+        let steep = bounds.sea_steepness(lod);
+        let disp = bounds.disp(lod);
+        // (a surface that reads no layer is the flat sea: any finite lengths do)
+        let finest = bounds.finest_texel(lod).min(1e3);
+        View {
+            lod: *lod,
+            altitude_slack: (disp[0] * disp[0] + disp[1] * disp[1]) / earth_radius_m + 1e-6,
+            steep,
+            slope: steep.slope_limit().map(|s| s.norm),
+            split_m: disp[0].max(disp[1]).max(8.0 * finest),
+            split_rough_m: 8.0 * finest,
+            floor_m: 0.5 * finest,
+            disp,
+            height_limit: bounds.height_limit(lod),
+        }
+    }
+}
+
+/// One ray's search: the surface it meets and the stretch of it already searched. Embree's
+/// callbacks receive it through the query context.
+#[derive(Clone, Copy, Debug)]
+pub struct Query {
+    searched: Searched,
+    view: View,
 }
 
 impl ExactSurface {
     /// The surface of `ocean` as a camera at world position `origin` (x, z) sees it, on an
-    /// earth of radius `earth_radius_m`.
+    /// earth of radius `earth_radius_m`; with `levels`, also the surfaces of the ocean's
+    /// low-passed levels ([`crate::ocean::levels::Levels`], built here if they are not yet),
+    /// which filtered normals' paths meet.
     pub fn new(
         ocean: Arc<Surface>,
         origin: [f64; 2],
         earth_radius_m: f64,
+        levels: bool,
     ) -> Result<ExactSurface, String> {
         if !matches!(
             ocean.params().interp,
@@ -79,48 +128,64 @@ impl ExactSurface {
                 ocean.params().interp
             ));
         }
-        let bounds = SurfaceBounds::new(&ocean.sampler(origin));
-        let steep = bounds.sea_steepness();
-        let disp = bounds.disp();
-        let h = bounds.height_limit();
-        let disp_norm = (disp[0] * disp[0] + disp[1] * disp[1] + h * h).sqrt();
-        let finest = ocean
-            .layers()
-            .iter()
-            .map(|l| l.dx())
-            .fold(f64::INFINITY, f64::min);
+        let bounds = SurfaceBounds::new(&ocean.sampler(origin), levels.then(|| ocean.levels()));
+        let (prism_disp, h) = bounds.limits_any();
+        let all = View::new(&bounds, &ALL_WAVES, earth_radius_m);
         Ok(ExactSurface {
-            altitude_slack: (disp[0] * disp[0] + disp[1] * disp[1]) / earth_radius_m + 1e-6,
-            steep,
-            slope: steep.slope_limit().map(|s| s.norm),
-            split_m: disp[0].max(disp[1]).max(8.0 * finest),
-            split_rough_m: 8.0 * finest,
-            floor_m: 0.5 * finest,
+            prism_disp,
+            prism_disp_norm: (prism_disp[0] * prism_disp[0]
+                + prism_disp[1] * prism_disp[1]
+                + h * h)
+                .sqrt(),
+            all,
+            levels,
             ocean,
             origin,
             earth_radius_m,
             bounds,
-            disp,
-            disp_norm,
         })
     }
 
-    fn implicit(&self) -> Implicit<'_> {
-        Implicit {
-            sampler: self.ocean.sampler(self.origin),
-            earth_radius_m: self.earth_radius_m,
-            lip: self.slope.map_or(f64::INFINITY, |s| 1.0 + s),
+    /// A ray's search of the surface `lod` (every layer whole, [`ALL_WAVES`], without levels).
+    pub fn query(&self, lod: &LevelSet) -> Query {
+        let view = if *lod == ALL_WAVES || !self.levels {
+            self.all
+        } else {
+            View::new(&self.bounds, lod, self.earth_radius_m)
+        };
+        Query {
+            searched: Searched::default(),
+            view,
         }
     }
 
-    /// How far an exact hit point may lie from the surface, m, beyond its f32 rounding: the
-    /// root's tolerance on F, what the inversion's residual can add to it (the slope bound,
-    /// or 10 without one, times its tolerance), and the f32 rounding of the summed heights;
-    /// doubled for room. The integrator offsets rays leaving an exact hit by this much more
-    /// than a triangle hit's.
-    pub fn hit_error_m(&self) -> f32 {
-        let lip = 1.0 + self.slope.unwrap_or(10.0);
-        (2.0 * (search::TOL_F + lip * implicit::TOL_S + 1e-6 * self.bounds.height_limit())) as f32
+    fn sampler(&self) -> crate::ocean::Sampler<'_> {
+        let s = self.ocean.sampler(self.origin);
+        if self.levels {
+            s.with_levels(self.ocean.levels())
+        } else {
+            s
+        }
+    }
+
+    fn implicit(&self, view: &View) -> Implicit<'_> {
+        Implicit {
+            sampler: self.sampler(),
+            lod: view.lod,
+            earth_radius_m: self.earth_radius_m,
+            lip: view.slope.map_or(f64::INFINITY, |s| 1.0 + s),
+        }
+    }
+
+    /// How far an exact hit point on the surface `lod` may lie from it, m, beyond its f32
+    /// rounding: the root's tolerance on F, what the inversion's residual can add to it (the
+    /// slope bound, or 10 without one, times its tolerance), and the f32 rounding of the
+    /// summed heights; doubled for room. The integrator offsets rays leaving an exact hit by
+    /// this much more than a triangle hit's.
+    pub fn hit_error_m(&self, lod: &LevelSet) -> f32 {
+        let view = self.query(lod).view;
+        let lip = 1.0 + view.slope.unwrap_or(10.0);
+        (2.0 * (search::TOL_F + lip * implicit::TOL_S + 1e-6 * view.height_limit)) as f32
     }
 
     /// The box that holds the surface over the triangle of nominal corners `uv`.
@@ -135,7 +200,7 @@ impl ExactSurface {
             uv.iter().map(|c| c[1]).fold(f64::INFINITY, f64::min),
             uv.iter().map(|c| c[1]).fold(f64::NEG_INFINITY, f64::max),
         );
-        let [hlo, hhi] = self.bounds.height(x0, x1, z0, z1);
+        let [hlo, hhi] = self.bounds.height_any(x0, x1, z0, z1);
         // the sphere under the corners, and how far the patch between them can bulge past
         // their box (a chord's sagitta d^2 / 8R, with room)
         let base = uv.map(|c| crate::lod::curved_frame_position(c[0], c[1], [0.0; 3], r));
@@ -144,13 +209,13 @@ impl ExactSurface {
         let far = uv.iter().map(|c| c[0].hypot(c[1])).fold(0.0, f64::max) + d;
         // the tilt of the displacement away from the nadir's axes: a rotation by at most
         // theta moves a vector by at most theta times its length
-        let tilt = self.disp_norm * (far / r);
+        let tilt = self.prism_disp_norm * (far / r);
         let lo = std::array::from_fn(|k| base.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min));
         let hi =
             std::array::from_fn(|k| base.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max));
         let (lo, hi): ([f64; 3], [f64; 3]) = (lo, hi);
-        let widen_lo = [-self.disp[0], hlo, -self.disp[1]];
-        let widen_hi = [self.disp[0], hhi, self.disp[1]];
+        let widen_lo = [-self.prism_disp[0], hlo, -self.prism_disp[1]];
+        let widen_hi = [self.prism_disp[0], hhi, self.prism_disp[1]];
         // f32 corners rounded outwards
         let out = |v: f64, up: bool| -> f32 {
             let m = v.abs() * 1e-6 + 1e-4;
@@ -171,7 +236,7 @@ impl ExactSurface {
         uv: [[f32; 2]; 3],
         prism: &([f32; 3], [f32; 3]),
         tmax: f32,
-        searched: &mut Searched,
+        query: &mut Query,
     ) -> Option<(f32, f32, f32)> {
         let o = ray.org.map(f64::from);
         let d = ray.dir.map(f64::from);
@@ -188,7 +253,10 @@ impl ExactSurface {
             t0 = t0.max(a.min(b));
             t1 = t1.min(a.max(b));
         }
-        let (t, x) = searched.search(t0, t1, |a, b| self.first_crossing(o, d, a, b))?;
+        let view = &query.view;
+        let (t, x) = query
+            .searched
+            .search(t0, t1, |a, b| self.first_crossing(view, o, d, a, b))?;
         let t32 = t as f32;
         if !(t32 >= ray.tnear && t32 <= tmax) {
             return None;
@@ -205,15 +273,17 @@ impl ExactSurface {
         Some((t32, u as f32, v as f32))
     }
 
-    /// The unit normal of the displaced surface's own tangent plane at nominal position `x`
+    /// The unit normal of the surface `lod`'s own tangent plane at nominal position `x`
     /// (air side up), by central differences of X over 1 mm: the bilinear blend of the heights
     /// that the rays meet, where the mapped normal interpolates the layers' FFT derivatives
     /// instead (the two differ by up to a few degrees between texels).
-    pub fn normal_at(&self, x: [f64; 2]) -> [f32; 3] {
+    pub fn normal_at(&self, x: [f64; 2], lod: &LevelSet) -> [f32; 3] {
         const H: f64 = 1e-3;
-        let sampler = self.ocean.sampler(self.origin);
+        let sampler = self.sampler();
+        // (without levels every ray meets the whole sea)
+        let lod = if self.levels { lod } else { &ALL_WAVES };
         let at = |u: f64, v: f64| {
-            let f = sampler.fields_f64(u, v);
+            let f = sampler.fields_f64_at(u, v, lod);
             let d = [
                 f[crate::ocean::field::DX] as f64,
                 f[crate::ocean::field::H] as f64,
@@ -248,7 +318,7 @@ impl ExactSurface {
 /// need not be searched again from the next (a camera ray near the camera crosses some 17
 /// prism boxes over one stretch of sea).
 #[derive(Clone, Copy, Debug)]
-pub struct Searched {
+struct Searched {
     a: f64,
     b: f64,
 }
@@ -363,20 +433,33 @@ pub fn prisms_of(mesh: &Mesh, surface: &ExactSurface) -> Vec<([f32; 3], [f32; 3]
         .collect()
 }
 
-impl Accel for Exact {
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+impl Exact {
+    /// The closest hit of `ray` on the surface `lod`.
+    pub fn intersect_at(&self, ray: &Ray, lod: &LevelSet) -> Option<Hit> {
         if !ray.is_finite() {
             self.rejected.fetch_add(1, Ordering::Relaxed);
             return None;
         }
         let (uvs, idx) = (self.mesh.uvs(), self.mesh.indices());
-        let mut searched = Searched::default();
+        let mut query = self.surface.query(lod);
         self.tree.closest(ray, |prim, tmax| {
             let uv = idx[prim as usize].map(|v| uvs[v as usize]);
             let prism = &self.prisms[prim as usize];
             self.surface
-                .intersect_prism(ray, uv, prism, tmax, &mut searched)
+                .intersect_prism(ray, uv, prism, tmax, &mut query)
         })
+    }
+}
+
+impl Accel for Exact {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.intersect_at(ray, &ALL_WAVES)
+    }
+    fn intersect_many_at(&self, rays: &[Ray], lods: &[LevelSet], hits: &mut [Option<Hit>]) {
+        assert!(rays.len() == hits.len() && lods.len() == rays.len());
+        for ((r, lod), h) in rays.iter().zip(lods).zip(hits.iter_mut()) {
+            *h = self.intersect_at(r, lod);
+        }
     }
     fn mesh(&self) -> &Mesh {
         &self.mesh
@@ -387,11 +470,11 @@ impl Accel for Exact {
     fn exact_surface(&self) -> bool {
         true
     }
-    fn surface_normal(&self, hit: &Hit) -> Option<([f32; 3], f32)> {
+    fn surface_normal(&self, hit: &Hit, lod: &LevelSet) -> Option<([f32; 3], f32)> {
         let n = self
             .surface
-            .normal_at(self.interpolate_uv(hit).map(f64::from));
-        Some((n, self.surface.hit_error_m()))
+            .normal_at(self.interpolate_uv(hit).map(f64::from), lod);
+        Some((n, self.surface.hit_error_m(lod)))
     }
     fn rejected_rays(&self) -> u64 {
         self.rejected.load(Ordering::Relaxed)

@@ -137,8 +137,12 @@ pub(super) type Blocks = (usize, [i64; 2], [i64; 2]);
 /// One layer's pyramids: h's range, the steepest differences, and the displacement's range.
 pub(super) struct Pyramid {
     n: usize,
+    /// The layer's (level 0's) 1 / dx and grid origin, and its texels' scale to this grid's:
+    /// a nominal position x is at this grid's coordinate (origin + x inv_dx) scale, as the
+    /// sampler reads a level.
     inv_dx: f64,
     origin: [f64; 2],
+    scale: f64,
     pub heights: Levels<[f32; 2]>,
     pub steep: Levels<Steep>,
     pub disp: Levels<Disp>,
@@ -160,7 +164,10 @@ pub(super) struct LayerLimits {
 }
 
 impl Pyramid {
-    pub fn new(layer: &Layer, origin: [f64; 2]) -> (Pyramid, LayerLimits) {
+    /// The pyramids of `layer`, whose grid coordinate at nominal position x is
+    /// (`origin` + x `inv_dx`) `scale`: a layer's own (`scale` 1) or one of its levels (`origin`
+    /// and `inv_dx` its layer's, `scale` 2^-l).
+    pub fn new(layer: &Layer, origin: [f64; 2], inv_dx: f64, scale: f64) -> (Pyramid, LayerLimits) {
         let n = layer.n();
         let t = layer.fields();
         // (a layer's side is a power of two: neighbours wrap with a mask)
@@ -261,8 +268,9 @@ impl Pyramid {
         (
             Pyramid {
                 n,
-                inv_dx: layer.inv_dx(),
+                inv_dx,
                 origin,
+                scale,
                 heights: Levels::new(level1),
                 steep: Levels::new(steep1),
                 disp: Levels::new(disp1),
@@ -271,15 +279,20 @@ impl Pyramid {
         )
     }
 
+    /// The grid's texel, m.
+    pub fn dx(&self) -> f64 {
+        1.0 / (self.inv_dx * self.scale)
+    }
+
     /// The blocks holding every texel a bilinear read at nominal positions in
     /// `[x0, x1] x [z0, z1]` touches (level 0: the whole layer).
     #[inline]
     pub fn blocks(&self, x0: f64, x1: f64, z0: f64, z1: f64) -> Blocks {
         let p = [
-            self.origin[0] + x0 * self.inv_dx,
-            self.origin[0] + x1 * self.inv_dx,
-            self.origin[1] + z0 * self.inv_dx,
-            self.origin[1] + z1 * self.inv_dx,
+            (self.origin[0] + x0 * self.inv_dx) * self.scale,
+            (self.origin[0] + x1 * self.inv_dx) * self.scale,
+            (self.origin[1] + z0 * self.inv_dx) * self.scale,
+            (self.origin[1] + z1 * self.inv_dx) * self.scale,
         ];
         // (NaN fails the test too)
         if !p.iter().all(|v| v.abs() < 1e15) {
@@ -320,7 +333,7 @@ mod tests {
         let sampler = ocean.sampler([321.0, -45.5]);
         let mut rng = Rng::keyed(&[6]);
         for (layer, &origin) in sampler.layers().iter().zip(sampler.grid_origins()) {
-            let (pyramid, _) = Pyramid::new(layer, origin);
+            let (pyramid, _) = Pyramid::new(layer, origin, layer.inv_dx(), 1.0);
             let (n, t, dx) = (layer.n() as i64, layer.fields(), layer.dx());
             let at = |x: i64, z: i64| &t[(z.rem_euclid(n) * n + x.rem_euclid(n)) as usize];
             for _ in 0..300 {

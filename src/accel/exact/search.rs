@@ -15,9 +15,9 @@
 //! than the floor (both crossings between two points) is not seen. A sign change brackets a
 //! root, which the Illinois variant of false position narrows to [`TOL_F`].
 
-use super::ExactSurface;
 use super::bounds::SlopeBound;
 use super::implicit::{Eval, Implicit, Warm, sphere_coords};
+use super::{ExactSurface, View};
 
 /// |F| at which a root is accepted, m: part of the error the hit point carries into the
 /// integrator's offset of the next ray's origin ([`super::ExactSurface::hit_error_m`]).
@@ -45,6 +45,8 @@ struct RayPath<'a> {
     /// t of the ray's closest approach to the sphere's centre (where its altitude is least).
     t_low: f64,
     imp: Implicit<'a>,
+    /// The surface searched.
+    view: &'a View,
     warm: Option<Warm>,
     r: f64,
 }
@@ -75,6 +77,7 @@ impl ExactSurface {
     /// side), and the nominal position of the surface point there.
     pub(super) fn first_crossing(
         &self,
+        view: &View,
         o: [f64; 3],
         d: [f64; 3],
         t0: f64,
@@ -84,7 +87,7 @@ impl ExactSurface {
             return None;
         }
         let r = self.earth_radius_m;
-        let mut ray = self.ray_path(o, d);
+        let mut ray = self.ray_path(view, o, d);
         // the side the ray is on where its search starts, known after the first evaluation
         let mut side: Option<(f64, Eval)> = None;
         // depth first, nearer half on top: at most one entry per level waits, plus the top
@@ -101,16 +104,16 @@ impl ExactSurface {
             // further, down to eight of the finest texels, where no slope bound (the box's or
             // the sea's) certifies a march over it: only the bounds can skip ground there
             let ds = (b.s[0] - a.s[0]).hypot(b.s[1] - a.s[1]);
-            let halve = depth < MAX_DEPTH && ds > self.split_rough_m;
-            let slope = if halve && ds > self.split_m {
+            let halve = depth < MAX_DEPTH && ds > view.split_rough_m;
+            let slope = if halve && ds > view.split_m {
                 None
             } else {
                 let [x0, x1, z0, z1] = area;
                 // (the box's and the sea's bounds both hold there: so do their smaller parts)
-                let local = self.bounds.steepness(x0, x1, z0, z1);
-                local.min(self.steep).slope_limit()
+                let local = self.bounds.steepness(&view.lod, x0, x1, z0, z1);
+                local.min(view.steep).slope_limit()
             };
-            if halve && (ds > self.split_m || slope.is_none()) {
+            if halve && (ds > view.split_m || slope.is_none()) {
                 let m = ray.end(0.5 * (a.t + b.t));
                 stack[sp] = (m, b, depth + 1);
                 stack[sp + 1] = (a, m, depth + 1);
@@ -127,15 +130,16 @@ impl ExactSurface {
             let theta = a.s[0].hypot(a.s[1]).max(b.s[0].hypot(b.s[1])) / r;
             match self.march(&mut ray, t_prev, e_prev, b.t, theta, slope) {
                 Ok(hit) => return Some(hit),
-                // no crossing up to b: the next segment starts on the same side
-                Err(at_b) => side = Some((b.t, at_b)),
+                // no crossing up to b: the next segment starts on the same side (evaluated
+                // there afresh where the march did not reach b)
+                Err(at_b) => side = at_b.map(|e| (b.t, e)),
             }
         }
         None
     }
 
     /// The ray `o + t d` as the search walks it.
-    fn ray_path(&self, o: [f64; 3], d: [f64; 3]) -> RayPath<'_> {
+    fn ray_path<'a>(&'a self, view: &'a View, o: [f64; 3], d: [f64; 3]) -> RayPath<'a> {
         let r = self.earth_radius_m;
         let dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         let rel = [o[0], o[1] + r, o[2]];
@@ -144,7 +148,8 @@ impl ExactSurface {
             d,
             len: dd.sqrt(),
             t_low: -(rel[0] * d[0] + rel[1] * d[1] + rel[2] * d[2]) / dd,
-            imp: self.implicit(),
+            imp: self.implicit(view),
+            view,
             warm: None,
             r,
         }
@@ -161,7 +166,8 @@ impl ExactSurface {
         [t0, t1]: [f64; 2],
         n: usize,
     ) -> ([f64; 4], Vec<super::implicit::Eval>) {
-        let mut ray = self.ray_path(o, d);
+        let view = self.query(&crate::ocean::slopes::ALL_WAVES).view;
+        let mut ray = self.ray_path(&view, o, d);
         ray.imp.lip = f64::INFINITY;
         let area = self.nominal_box(&ray, &ray.end(t0), &ray.end(t1));
         let points = (0..=n)
@@ -177,7 +183,7 @@ impl ExactSurface {
         let len = (b.t - a.t) * ray.len;
         let far = a.s[0].hypot(a.s[1]).max(b.s[0].hypot(b.s[1])) + len;
         let theta = far / self.earth_radius_m;
-        let [dx, dz] = self.disp;
+        let [dx, dz] = ray.view.disp;
         // how far the arc positions of a straight segment stray from their chord, with room,
         // and how much the sphere stretches a displacement azimuthally (theta / sin theta - 1
         // < theta^2 / 5 below a radian)
@@ -196,7 +202,7 @@ impl ExactSurface {
         let mut area = [s[0] - dx, s[1] + dx, s[2] - dz, s[3] + dz];
         for _ in 0..NARROWINGS {
             let [x0, x1, z0, z1] = area;
-            let d = self.bounds.displacement(x0, x1, z0, z1);
+            let d = self.bounds.displacement(&ray.view.lod, x0, x1, z0, z1);
             let narrowed = [
                 x0.max(s[0] - d[1]),
                 x1.min(s[1] - d[0]),
@@ -216,8 +222,8 @@ impl ExactSurface {
     /// the nominal positions `area` ([`Self::nominal_box`]).
     #[inline]
     fn clears(&self, ray: &RayPath, a: &End, b: &End, [x0, x1, z0, z1]: [f64; 4]) -> bool {
-        let [lo, hi] = self.bounds.height(x0, x1, z0, z1);
-        let hi = hi + self.altitude_slack;
+        let [lo, hi] = self.bounds.height(&ray.view.lod, x0, x1, z0, z1);
+        let hi = hi + ray.view.altitude_slack;
         let ray_hi = a.a.max(b.a);
         if ray_hi < lo {
             return true;
@@ -241,8 +247,8 @@ impl ExactSurface {
         t_end: f64,
         theta: f64,
         slope: Option<SlopeBound>,
-    ) -> Result<(f64, [f64; 2]), Eval> {
-        let floor = self.floor_m / ray.len;
+    ) -> Result<(f64, [f64; 2]), Option<Eval>> {
+        let floor = ray.view.floor_m / ray.len;
         // |dF/dt| <= |da/dt| + |dH/dt|: the altitude and the arc position s move with the
         // ray's vertical and horizontal parts, each leaking into the other by the tilt from
         // the nadir (sin theta, with room for the segment's own reach and the sphere's
@@ -251,9 +257,32 @@ impl ExactSurface {
         let (dv, dh) = (ray.d[1].abs(), ray.d[0].hypot(ray.d[2]));
         let leak = 1.01 * theta + 1e-3;
         let spill = leak * (dh + dv);
-        let k = slope.map(|s| {
-            let (vx, vz) = (ray.d[0].abs() + spill, ray.d[2].abs() + spill);
-            1.01 * (dv + leak * dh + s.rate(vx, vz, dh + leak * dv)) + 1e-9
+        let (vx, vz) = (ray.d[0].abs() + spill, ray.d[2].abs() + spill);
+        // how fast the surface's height can change along the ray
+        let drift = slope.map(|s| 1.01 * s.rate(vx, vz, dh + leak * dv) + 1e-9);
+        // The ray's vertical part away from the surface (up above it, down below it); F keeps
+        // its sign until the crossing, so the march's side is e's throughout.
+        let away = if e.f > 0.0 { ray.d[1] } else { -ray.d[1] };
+        // Where the ray climbs away from the surface (or, below it, sinks) faster than the
+        // surface's height can follow, F only moves away from zero over the segment: there
+        // is no crossing in it, and nothing to evaluate (the altitude's rate is the ray's
+        // vertical part, less the tilt's leak of both parts). Reflected rays rising steeply
+        // and refracted ones sinking end here.
+        if let Some(drift) = drift
+            && e.converged
+            && away - leak * (dh + dv) > drift
+        {
+            return Err(None);
+        }
+        // How fast F can move towards zero: a ray approaching the surface closes in by its
+        // vertical part as well as the surface's drift; one moving away, by the drift less
+        // its own climb (which the test above leaves below the drift)
+        let k = drift.map(|drift| {
+            if away < 0.0 {
+                1.01 * (dv + leak * dh) + drift
+            } else {
+                drift + 1.01 * leak * (dh + dv) - 0.99 * away + 1e-9
+            }
         });
         while t < t_end {
             // (F is known to a tenth of itself while it is far from zero; an inversion that did
@@ -273,7 +302,7 @@ impl ExactSurface {
             }
             (t, e) = (tn, en);
         }
-        Err(e)
+        Err(Some(e))
     }
 
     /// The root of F between `a` and `b`, whose F differ in sign: false position with the

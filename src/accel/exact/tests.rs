@@ -6,6 +6,7 @@ use std::sync::Arc;
 use super::implicit::sphere_coords;
 use super::*;
 use crate::lod::{LodParams, Pattern, Reading, tessellate};
+use crate::ocean::slopes::{ALL_WAVES, LevelSet};
 use crate::ocean::{LayerSpec, OceanParams, field};
 use crate::rng::Rng;
 
@@ -54,19 +55,19 @@ fn pyramid_bounds_hold_every_read_and_narrow_with_the_box() {
     let ocean = sea(1.0);
     let origin = [1234.5, -987.25];
     let sampler = ocean.sampler(origin);
-    let b = SurfaceBounds::new(&sampler);
-    let global = b.height(-1e6, 1e6, -1e6, 1e6);
+    let b = SurfaceBounds::new(&sampler, None);
+    let global = b.height(&ALL_WAVES, -1e6, 1e6, -1e6, 1e6);
     let mut rng = Rng::keyed(&[3]);
     let (mut narrower, mut narrower_d) = (0, 0);
     for _ in 0..400 {
         let (x0, z0) = (rng.f64() * 600.0 - 300.0, rng.f64() * 600.0 - 300.0);
         let size = 0.01 * 1e4f64.powf(rng.f64()); // 1 cm to 100 m
         let (x1, z1) = (x0 + size, z0 + size * rng.f64());
-        let [lo, hi] = b.height(x0, x1, z0, z1);
+        let [lo, hi] = b.height(&ALL_WAVES, x0, x1, z0, z1);
         assert!(lo >= global[0] && hi <= global[1]);
         narrower += usize::from(hi - lo < 0.5 * (global[1] - global[0]));
-        let d = b.displacement(x0, x1, z0, z1);
-        let [dx, dz] = b.disp();
+        let d = b.displacement(&ALL_WAVES, x0, x1, z0, z1);
+        let [dx, dz] = b.disp(&ALL_WAVES);
         assert!(d[0] >= -dx - 1e-6 && d[1] <= dx + 1e-6, "{d:?} {dx}");
         assert!(d[2] >= -dz - 1e-6 && d[3] <= dz + 1e-6, "{d:?} {dz}");
         narrower_d += usize::from(d[1] - d[0] < dx);
@@ -106,9 +107,9 @@ fn local_slope_and_strain_bounds_hold_every_secant_in_the_box() {
     let ocean = sea(1.0);
     let origin = [1234.5, -987.25];
     let sampler = ocean.sampler(origin);
-    let b = SurfaceBounds::new(&sampler);
-    let global = b.steepness(-1e6, 1e6, -1e6, 1e6);
-    let sea = b.sea_steepness();
+    let b = SurfaceBounds::new(&sampler, None);
+    let global = b.steepness(&ALL_WAVES, -1e6, 1e6, -1e6, 1e6);
+    let sea = b.sea_steepness(&ALL_WAVES);
     let global_limit = sea
         .slope_limit()
         .expect("the test sea has a slope bound")
@@ -126,7 +127,7 @@ fn local_slope_and_strain_bounds_hold_every_secant_in_the_box() {
         let (x0, z0) = (rng.f64() * 600.0 - 300.0, rng.f64() * 600.0 - 300.0);
         let size = 0.01 * 300f64.powf(rng.f64()); // 1 cm to 3 m
         let (x1, z1) = (x0 + size, z0 + size);
-        let local = b.steepness(x0, x1, z0, z1);
+        let local = b.steepness(&ALL_WAVES, x0, x1, z0, z1);
         assert!(local.slope[0] <= global.slope[0] && local.slope[1] <= global.slope[1]);
         assert!(local.strain <= global.strain);
         // the box's bound, and one over a centimetre more on each side for the arc-position
@@ -136,7 +137,7 @@ fn local_slope_and_strain_bounds_hold_every_secant_in_the_box() {
             .expect("the test sea's strain is below 0.95");
         lower += usize::from(limit.norm < 0.5 * global_limit);
         let wide = b
-            .steepness(x0 - 0.01, x1 + 0.01, z0 - 0.01, z1 + 0.01)
+            .steepness(&ALL_WAVES, x0 - 0.01, x1 + 0.01, z0 - 0.01, z1 + 0.01)
             .slope_limit()
             .expect("bounded");
         for _ in 0..40 {
@@ -184,10 +185,10 @@ fn local_slope_and_strain_bounds_hold_every_secant_in_the_box() {
 #[test]
 fn a_stretch_box_holds_the_nominal_positions_under_it() {
     let ocean = sea(1.0);
-    let surface = ExactSurface::new(ocean, [50.0, 20.0], EARTH_R).unwrap();
+    let surface = ExactSurface::new(ocean, [50.0, 20.0], EARTH_R, false).unwrap();
     let mut rng = Rng::keyed(&[8]);
     let mut narrower = 0;
-    let [dx, _] = surface.disp;
+    let [dx, _] = surface.all.disp;
     for _ in 0..300 {
         let height = 2.0 * 5000f64.powf(rng.f64());
         let (az, dip) = (
@@ -217,13 +218,13 @@ fn implicit_function_is_the_signed_altitude_above_the_surface() {
     for chop in [0.0, 1.0] {
         let ocean = sea(chop);
         let origin = [50.0, 20.0];
-        let surface = ExactSurface::new(ocean.clone(), origin, EARTH_R).unwrap();
+        let surface = ExactSurface::new(ocean.clone(), origin, EARTH_R, false).unwrap();
         // inversions to full accuracy, and as a march runs them (to a tenth of F)
         let imp = Implicit {
             lip: f64::INFINITY,
-            ..surface.implicit()
+            ..surface.implicit(&surface.all)
         };
-        let marching = surface.implicit();
+        let marching = surface.implicit(&surface.all);
         let mut rng = Rng::keyed(&[5]);
         for _ in 0..300 {
             let r = 5000.0 * rng.f64();
@@ -270,7 +271,7 @@ fn prisms_hold_the_surface_over_their_triangles() {
     let ocean = sea(1.0);
     let origin = [0.0, 0.0];
     let mesh = coarse_mesh(&ocean, origin);
-    let surface = ExactSurface::new(ocean.clone(), origin, EARTH_R).unwrap();
+    let surface = ExactSurface::new(ocean.clone(), origin, EARTH_R, false).unwrap();
     let prisms = prisms_of(&mesh, &surface);
     let sampler = ocean.sampler(origin);
     let mut rng = Rng::keyed(&[9]);
@@ -302,8 +303,14 @@ fn prisms_hold_the_surface_over_their_triangles() {
 
 /// The first sign change of F along the ray by steps of `step` metres, narrowed by bisection in
 /// f64, up to `t_max`: the oracle.
-fn dense_march(surface: &ExactSurface, ray: &Ray, step: f64, t_max: f64) -> Option<f64> {
-    let imp = surface.implicit();
+fn dense_march(
+    surface: &ExactSurface,
+    lod: &LevelSet,
+    ray: &Ray,
+    step: f64,
+    t_max: f64,
+) -> Option<f64> {
+    let imp = surface.implicit(&surface.query(lod).view);
     let o = ray.org.map(f64::from);
     let d = ray.dir.map(f64::from);
     let at = |t: f64| -> [f64; 3] { std::array::from_fn(|k| o[k] + t * d[k]) };
@@ -330,14 +337,11 @@ fn dense_march(surface: &ExactSurface, ray: &Ray, step: f64, t_max: f64) -> Opti
     None
 }
 
-#[test]
-fn hits_agree_with_a_dense_march() {
-    let ocean = sea(1.0);
-    let origin = [0.0, 0.0];
-    let mesh = Arc::new(coarse_mesh(&ocean, origin));
-    let surface = ExactSurface::new(ocean.clone(), origin, EARTH_R).unwrap();
-    let exact = Exact::build(mesh, surface);
-    let imp = exact.surface().implicit();
+/// 48 rays, each on the surface `lod_of` draws for it: camera rays from steep to grazing, and
+/// rays rising at grazing angles from just above and just below that surface; each hits where
+/// the dense march finds the first sign change, to 1e-4 of t, and names the nominal position
+/// of the point hit. Returns how many hit.
+fn agree_with_a_dense_march(exact: &Exact, lod_of: &mut dyn FnMut(&mut Rng) -> LevelSet) -> usize {
     let mut rng = Rng::keyed(&[11]);
     let mut rays = Vec::new();
     // camera rays, steep to grazing
@@ -345,13 +349,19 @@ fn hits_agree_with_a_dense_march() {
         let el = -(3.5f64 + 60.0 * rng.f64().powi(3)).to_radians();
         let az = std::f64::consts::TAU * rng.f64();
         let d = [el.cos() * az.cos(), el.sin(), el.cos() * az.sin()];
-        rays.push(Ray::new([0.0, CAMERA_M as f32, 0.0], d.map(|c| c as f32)));
+        let lod = lod_of(&mut rng);
+        rays.push((
+            Ray::new([0.0, CAMERA_M as f32, 0.0], d.map(|c| c as f32)),
+            lod,
+        ));
     }
     // rays rising at grazing angles from just above the surface (reflections that may meet
     // the next wave) and from just below it (refractions, which meet it from the water side)
     for k in 0..24 {
+        let lod = lod_of(&mut rng);
+        let imp = exact.surface().implicit(&exact.surface().query(&lod).view);
         let x = [40.0 * rng.f64() - 20.0, 40.0 * rng.f64() - 20.0];
-        let f = imp.sampler.fields_f64(x[0], x[1]);
+        let f = imp.sampler.fields_f64_at(x[0], x[1], &lod);
         let v = [f[field::DX] as f64, f[field::H] as f64, f[field::DZ] as f64];
         let p = crate::lod::curved_frame_position(x[0], x[1], v, EARTH_R);
         let above = k % 2 == 0;
@@ -359,29 +369,95 @@ fn hits_agree_with_a_dense_march() {
         let az = std::f64::consts::TAU * rng.f64();
         let o = [p[0], p[1] + if above { 0.02 } else { -0.02 }, p[2]];
         let d = [el.cos() * az.cos(), el.sin(), el.cos() * az.sin()];
-        rays.push(Ray::new(o.map(|c| c as f32), d.map(|c| c as f32)));
+        rays.push((Ray::new(o.map(|c| c as f32), d.map(|c| c as f32)), lod));
     }
     let mut hits = 0;
-    for ray in &rays {
-        let want = dense_march(exact.surface(), ray, 0.002, 150.0);
-        let got = exact.intersect(ray).filter(|h| h.t < 150.0);
+    for (ray, lod) in &rays {
+        let want = dense_march(exact.surface(), lod, ray, 0.002, 150.0);
+        let got = exact.intersect_at(ray, lod).filter(|h| h.t < 150.0);
         match (want, got) {
             (None, None) => {}
             (Some(w), Some(g)) => {
                 hits += 1;
                 assert!(
                     (g.t as f64 - w).abs() <= 1e-4 * w.max(1.0),
-                    "t {} against the oracle's {w} on {ray:?}",
+                    "t {} against the oracle's {w} on {ray:?} ({lod:?})",
                     g.t
                 );
                 // the hit names the nominal position of the surface point hit
+                let imp = exact.surface().implicit(&exact.surface().query(lod).view);
                 let x = exact.interpolate_uv(&g).map(f64::from);
                 let p = ray.at(g.t).map(f64::from);
                 let e = imp.eval(p, &mut None);
                 assert!((e.x[0] - x[0]).abs() < 1e-2 && (e.x[1] - x[1]).abs() < 1e-2);
             }
-            (w, g) => panic!("oracle {w:?}, exact {g:?} on {ray:?}"),
+            (w, g) => panic!("oracle {w:?}, exact {g:?} on {ray:?} ({lod:?})"),
         }
     }
-    assert!(hits >= 36, "{hits} of {} rays hit", rays.len());
+    hits
+}
+
+#[test]
+fn hits_agree_with_a_dense_march() {
+    let ocean = sea(1.0);
+    let origin = [0.0, 0.0];
+    let mesh = Arc::new(coarse_mesh(&ocean, origin));
+    let surface = ExactSurface::new(ocean.clone(), origin, EARTH_R, false).unwrap();
+    let exact = Exact::build(mesh, surface);
+    let hits = agree_with_a_dense_march(&exact, &mut |_| ALL_WAVES);
+    assert!(hits >= 36, "{hits} of 48 rays hit");
+}
+
+/// A random surface of the layers' levels: each layer at one of its levels, or left out.
+fn random_lod(ocean: &Surface, rng: &mut Rng) -> LevelSet {
+    let levels = ocean.levels();
+    let mut lod = ALL_WAVES;
+    for (i, l) in lod.iter_mut().enumerate().take(ocean.layers().len()) {
+        let n = levels.count(i) + 2;
+        let pick = ((rng.f64() * n as f64) as usize).min(n - 1);
+        *l = if pick > levels.count(i) {
+            crate::ocean::slopes::NOT_READ
+        } else {
+            pick as u8
+        };
+    }
+    lod
+}
+
+/// With the levels held, rays on random surfaces of them (each layer at one of its levels, or
+/// left out) hit where the dense march on that surface finds its first crossing, and the
+/// prisms hold every such surface over their triangles.
+#[test]
+fn hits_on_the_levels_surfaces_agree_with_a_dense_march() {
+    let ocean = sea(1.0);
+    let origin = [0.0, 0.0];
+    let mesh = Arc::new(coarse_mesh(&ocean, origin));
+    let surface = ExactSurface::new(ocean.clone(), origin, EARTH_R, true).unwrap();
+    let exact = Exact::build(mesh.clone(), surface);
+    let hits = agree_with_a_dense_march(&exact, &mut |rng| random_lod(&ocean, rng));
+    assert!(hits >= 30, "{hits} of 48 rays hit");
+    let sampler = ocean.sampler(origin).with_levels(ocean.levels());
+    let mut rng = Rng::keyed(&[12]);
+    for (tri, prism) in mesh.indices().iter().zip(&exact.prisms).step_by(37) {
+        let uv = tri.map(|v| mesh.uvs()[v as usize].map(f64::from));
+        for _ in 0..20 {
+            let lod = random_lod(&ocean, &mut rng);
+            let (mut a, mut b) = (rng.f64(), rng.f64());
+            if a + b > 1.0 {
+                (a, b) = (1.0 - a, 1.0 - b);
+            }
+            let x: [f64; 2] = std::array::from_fn(|k| {
+                uv[0][k] + a * (uv[1][k] - uv[0][k]) + b * (uv[2][k] - uv[0][k])
+            });
+            let f = sampler.fields_f64_at(x[0], x[1], &lod);
+            let v = [f[field::DX] as f64, f[field::H] as f64, f[field::DZ] as f64];
+            let p = crate::lod::curved_frame_position(x[0], x[1], v, EARTH_R);
+            for k in 0..3 {
+                assert!(
+                    prism.0[k] as f64 <= p[k] && p[k] <= prism.1[k] as f64,
+                    "{p:?} outside {prism:?} ({lod:?})"
+                );
+            }
+        }
+    }
 }

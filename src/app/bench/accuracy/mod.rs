@@ -307,10 +307,10 @@ fn scene_with(job: &AccuracyJob, t: &Tessellation) -> SceneConfig {
 }
 
 /// The exact surface's scene: `t`'s prisms, mapped normals.
-fn exact_scene(job: &AccuracyJob, t: &Tessellation) -> SceneConfig {
+fn exact_scene(job: &AccuracyJob, t: &Tessellation, normals: NormalMode) -> SceneConfig {
     let mut s = scene_with(job, t);
     s.render.surface = SurfaceKind::Exact;
-    s.render.normals = NormalMode::Mapped;
+    s.render.normals = normals;
     s
 }
 
@@ -332,7 +332,7 @@ fn check(job: &AccuracyJob) -> Result<(), AppError> {
         crate::lod::params_for(&s.lod, &s.camera)?;
     }
     if let Some(x) = &job.exact {
-        let s = exact_scene(job, &x.tessellation);
+        let s = exact_scene(job, &x.tessellation, NormalMode::Mapped);
         s.validate()?;
         crate::lod::params_for(&s.lod, &s.camera)?;
     }

@@ -65,6 +65,7 @@ pub(super) fn write(
     })?;
     // The groups on the chart, those the sweep has, in this order.
     let group_of = |p: &Point| match (p.surface, p.normals) {
+        (SurfaceKind::Exact, NormalMode::Filtered) => 4,
         (SurfaceKind::Exact, _) => 3,
         (_, NormalMode::Mapped) => 0,
         // (bench accuracy renders no flat-shaded mesh; grouped with the unmapped)
@@ -76,6 +77,7 @@ pub(super) fn write(
         "vertex normals",
         "filtered normals",
         "exact surface, mapped normals",
+        "exact surface, filtered normals",
     ];
     let present: Vec<usize> = (0..names.len())
         .filter(|&g| points.iter().any(|p| group_of(p) == g))
@@ -94,7 +96,7 @@ pub(super) fn write(
             group: present.iter().position(|&g| g == group_of(p)).unwrap_or(0),
             pareto: p.pareto,
             label: (p.lod.starts_with("paper") && p.spp == last_spp(p)).then(|| match p.surface {
-                SurfaceKind::Exact => format!("  {} exact", p.lod),
+                SurfaceKind::Exact => format!("  {} exact {}", p.lod, p.normals),
                 SurfaceKind::Mesh => format!("  {} {}", p.lod, p.normals),
             }),
         })

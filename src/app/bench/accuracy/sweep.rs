@@ -34,14 +34,21 @@ pub(super) fn render_points(
 ) -> Result<(Vec<Rendered>, Shared), AppError> {
     let mut out = Vec::new();
     let mut shared: Option<Shared> = None;
-    let exact = job.exact.iter().map(|x| {
-        let modes = vec![(NormalMode::Mapped, SurfaceKind::Exact)];
-        (
-            &x.tessellation,
-            exact_scene(job, &x.tessellation),
-            modes,
-            &x.spp,
-        )
+    // mapped normals on the exact surface, and filtered ones where the sweep has them (each
+    // prepared on its own: filtered normals' prisms hold the levels' surfaces too)
+    let filtered = job.normals.contains(&NormalMode::Filtered);
+    let exact = job.exact.iter().flat_map(|x| {
+        [NormalMode::Mapped, NormalMode::Filtered]
+            .into_iter()
+            .filter(move |&n| n == NormalMode::Mapped || filtered)
+            .map(move |n| {
+                (
+                    &x.tessellation,
+                    exact_scene(job, &x.tessellation, n),
+                    vec![(n, SurfaceKind::Exact)],
+                    &x.spp,
+                )
+            })
     });
     let meshes = job.tessellations.iter().map(|t| {
         let modes = job
