@@ -268,20 +268,26 @@ fn bench_accuracy_writes_its_files_and_a_configuration_matches_itself() {
     let r = app::bench::accuracy::run(&job).unwrap();
     assert_eq!(
         r.points.len(),
-        13,
-        "two tessellations: mapped, vertex and filtered, 8 and 32 spp; the exact surface at 8"
+        14,
+        "two tessellations: mapped, vertex and filtered, 8 and 32 spp; the exact surface at 8 \
+         with mapped and filtered normals"
     );
     assert!(
         (r.points[4..6].iter().chain(&r.points[10..12])).all(|p| p.normals == NormalMode::Filtered)
     );
-    // The exact surface's point: paper-low's prisms, mapped normals, measured like the rest
-    // (its set-up its own: the prisms and the pyramids).
-    let exact = &r.points[12];
-    assert_eq!(
-        (exact.lod.as_str(), exact.normals, exact.surface, exact.spp),
-        ("paper-low", NormalMode::Mapped, SurfaceKind::Exact, 8)
-    );
-    assert!(exact.error.is_finite() && exact.error_ci[0] <= exact.error_ci[1]);
+    // The exact surface's points: paper-low's prisms, mapped normals and (the sweep has them)
+    // filtered ones, measured like the rest (their set-up their own: the prisms and the
+    // pyramids, the levels' too for filtered normals).
+    for (p, normals) in r.points[12..]
+        .iter()
+        .zip([NormalMode::Mapped, NormalMode::Filtered])
+    {
+        assert_eq!(
+            (p.lod.as_str(), p.normals, p.surface, p.spp),
+            ("paper-low", normals, SurfaceKind::Exact, 8)
+        );
+        assert!(p.error.is_finite() && p.error_ci[0] <= p.error_ci[1]);
+    }
     assert!(
         r.points[..12]
             .iter()
@@ -290,6 +296,7 @@ fn bench_accuracy_writes_its_files_and_a_configuration_matches_itself() {
     let csv = std::fs::read_to_string(dir.join("frontier.csv")).unwrap();
     assert!(csv.starts_with("lod,normals,surface,spp,"), "{csv}");
     assert!(csv.contains("paper-low,mapped,exact,8,"), "{csv}");
+    assert!(csv.contains("paper-low,filtered,exact,8,"), "{csv}");
     // One ocean for every tessellation and the reference, its build counted in each point as
     // a render of its own would count it.
     assert_eq!(r.oceans_built, 1);

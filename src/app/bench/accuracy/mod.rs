@@ -404,7 +404,9 @@ pub fn run(job: &AccuracyJob) -> Result<AccuracyReport, AppError> {
     crate::app::check_output_dir(&job.out)?;
     let t0 = Instant::now();
     let per_tess = (job.normals.len() * job.spp.len()) as u64;
-    let exact = job.exact.as_ref().map_or(0, |x| x.spp.len()) as u64;
+    // (the exact surface with mapped normals, and with filtered ones where the sweep has them)
+    let exact_modes = 1 + u64::from(job.normals.contains(&NormalMode::Filtered));
+    let exact = job.exact.as_ref().map_or(0, |x| x.spp.len()) as u64 * exact_modes;
     let progress = Progress::new(
         job.progress,
         job.tessellations.len() as u64 * per_tess + exact + 1,
