@@ -191,102 +191,6 @@ impl SceneRef<'_> {
         out[0]
     }
 
-    /// Whether a ray descends more steeply than any slope of the mesh ([`max_slope`]): along
-    /// it the height above the surface only falls, so it crosses the surface at most once.
-    #[inline]
-    pub fn descends_steeply(&self, d: Vec3) -> bool {
-        self.skip_slope
-            .is_some_and(|slope| d.y < 0.0 && -d.y > slope * (d.x * d.x + d.z * d.z).sqrt())
-    }
-
-    /// The triangle a pixel's camera rays are predicted to hit: the one its centre ray `ray`
-    /// hits, when that ray descends more steeply than the mesh ever slopes (`None` otherwise,
-    /// for a miss, and when `predict_camera_hits` is off). A camera ray that descends as
-    /// steeply crosses the surface at most once, so a hit on this triangle is its closest hit
-    /// (up to rounding): the BVH need not be searched ([`Self::radiance_camera_batch`]). The
-    /// centre ray depends on the pixel alone, so a sample's hit does not depend on which other
-    /// samples a render or a pass takes.
-    pub fn predict_camera_prim(&self, ray: &Ray, c: &mut Counters) -> Option<u32> {
-        if !self.predict_camera_hits
-            || !self.descends_steeply(Vec3::from(ray.dir))
-            || !ray.is_finite()
-        {
-            return None;
-        }
-        c.prediction_rays += 1;
-        self.accel.intersect(ray).map(|h| h.prim)
-    }
-
-    /// Whether paths meet the exact surface of the waves their footprints resolve: filtered
-    /// normals on the exact surface.
-    fn exact_lods(&self, settings: &TraceSettings) -> bool {
-        settings.normals == NormalMode::Filtered
-            && self.slopes.is_some()
-            && self.accel.exact_surface()
-    }
-
-    /// The surface a camera ray's path meets ([`Self::exact_lods`]; every wave otherwise):
-    /// the levels of the footprint where the ray meets the mean sea (the earth's sphere; where
-    /// it passes above it, at its closest approach), one of each layer's two drawn with the
-    /// blend's weight by a number from the path's `rng` ([`SurfaceSlopes::drawn_levels`]).
-    /// The hit itself lies a wave's height nearer or farther, where the footprint is that much
-    /// narrower or wider. Its later segments keep it: a ray leaving a hit starts on that
-    /// surface, and another surface would lie above or below its origin.
-    fn camera_lod(&self, ray: &Ray, settings: &TraceSettings, rng: &mut Rng) -> LevelSet {
-        let Some(slopes) = self.slopes.filter(|_| self.exact_lods(settings)) else {
-            return ALL_WAVES;
-        };
-        let r = self.earth_radius_m;
-        let [ox, oy, oz] = ray.org.map(f64::from);
-        let d = Vec3::from(ray.dir).normalize_or(Vec3::NEG_Y).as_dvec3();
-        // |o + t d - c| = r, c the sphere's centre (0, -r, 0): t^2 + 2 b t + q = 0
-        let b = ox * d.x + (oy + r) * d.y + oz * d.z;
-        let q = ox * ox + oz * oz + oy * (oy + 2.0 * r);
-        let disc = b * b - q;
-        let t = if disc >= 0.0 { -b - disc.sqrt() } else { -b };
-        let sigma = footprint::width_at(0.0, settings, t.max(0.0) as f32) * settings.filter_width;
-        slopes.drawn_levels(sigma, rng.f32())
-    }
-
-    /// Radiance along camera rays (in the air, first segment), computed together: see
-    /// [`Self::radiance_batch`]. At most [`CAMERA_BATCH`] rays; `rngs[i]` is ray i's generator
-    /// and `out[i]` receives its radiance. `predicted`: the pixel's triangle from
-    /// [`Self::predict_camera_prim`]; a ray that descends more steeply than the mesh slopes and
-    /// meets it takes that hit ([`hit_on_triangle`]) instead of the BVH's. Each ray's result is
-    /// bit for bit what it gets in a batch of one with the same prediction; with `None`, what
-    /// [`Self::radiance`] gives it (with a prediction, that up to the rounding of the hit).
-    pub fn radiance_camera_batch(
-        &self,
-        rays: &[Ray],
-        predicted: Option<u32>,
-        settings: &TraceSettings,
-        rngs: &mut [Rng],
-        c: &mut Counters,
-        out: &mut [Vec3],
-    ) {
-        let n = rays.len();
-        assert!(n <= CAMERA_BATCH && rngs.len() == n && out.len() == n);
-        let mut entries = [PathVertex::NONE; CAMERA_BATCH];
-        for (i, ((e, ray), rng)) in entries
-            .iter_mut()
-            .zip(rays)
-            .zip(rngs.iter_mut())
-            .enumerate()
-        {
-            *e = PathVertex {
-                ray: *ray,
-                sample: i as u8,
-                parent: None,
-                in_water: false,
-                in_object: false,
-                width_m: 0.0,
-                lod: self.camera_lod(ray, settings, rng),
-                sun_pdf: 0.0,
-            };
-        }
-        self.radiance_batch(&entries[..n], predicted, 0, settings, rngs, c, out);
-    }
-
     /// The radiance of up to [`CAMERA_BATCH`] rays at `segment`, each from a different sample
     /// (`rngs[entry.sample]` is its generator), into `out`: the path tracer itself, a stage at a
     /// time over the whole batch, each ray's result bit for bit what it gets in a batch of one.
@@ -301,7 +205,7 @@ impl SceneRef<'_> {
     /// batch holds, so its random numbers are drawn in the same order as in a batch of one
     /// (`--pass` renders merge into the single render bit for bit because of this).
     #[allow(clippy::too_many_arguments)]
-    fn radiance_batch(
+    pub(super) fn radiance_batch(
         &self,
         entries: &[PathVertex],
         predicted: Option<u32>,
@@ -636,7 +540,17 @@ pub(super) struct PathVertex {
 }
 
 impl PathVertex {
-    const NONE: PathVertex = PathVertex {
+    /// Sample `sample`'s camera ray, whose path meets the surface `lod`.
+    pub(super) fn camera(ray: Ray, sample: u8, lod: LevelSet) -> PathVertex {
+        PathVertex {
+            ray,
+            sample,
+            lod,
+            ..PathVertex::NONE
+        }
+    }
+
+    pub(super) const NONE: PathVertex = PathVertex {
         ray: Ray {
             org: [0.0; 3],
             tnear: 0.0,

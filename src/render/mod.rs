@@ -5,6 +5,7 @@
 pub mod aov;
 mod bsdf;
 pub mod camera;
+mod camera_paths;
 pub mod counters;
 pub mod dielectric;
 pub mod earth_tilt;

@@ -1,8 +1,8 @@
 //! The exact ocean surface on Embree: the coarse triangles' prisms as user geometry, whose
 //! bounds and intersect callbacks (through the shim) are [`crate::accel::exact`]'s. Embree
 //! builds its BVH over the prisms' boxes and calls the intersect callback for each prism a ray
-//! meets; the ray's search ([`Query`]: the surface it meets, the stretch searched) rides in the query context, so
-//! overlapping prisms do not search one stretch twice.
+//! meets; the ray's search ([`Query`]: the surface it meets, the stretch searched) rides in
+//! the query context, so overlapping prisms do not search one stretch twice.
 
 use std::ffi::{c_int, c_void};
 use std::ptr::NonNull;
