@@ -8,6 +8,7 @@ use vastocean::config::{Backend, NormalMode, SceneConfig, SurfaceKind};
 mod cross {
     use std::sync::Arc;
 
+    use vastocean::accel::embree::{BuildOptions, Device, ExactScene};
     use vastocean::accel::exact::{Exact, ExactSurface};
     use vastocean::accel::{Accel, Ray};
     use vastocean::lod::{EARTH_RADIUS_M, LodParams, Pattern, Reading, tessellate};
@@ -72,16 +73,22 @@ mod cross {
             .collect()
     }
 
-    #[test]
-    fn embree_user_geometry_and_the_rust_prisms_find_the_same_hits() {
-        use vastocean::accel::embree::{BuildOptions, Device, ExactScene};
+    /// The test sea, and its exact surface inside the coarse mesh's prisms on both backends
+    /// (with the levels' surfaces too where `levels`).
+    fn backends(levels: bool) -> (Arc<Surface>, Exact, ExactScene) {
         let ocean = sea();
         let mesh = coarse(&ocean);
         let surface =
-            || ExactSurface::new(ocean.clone(), [0.0, 0.0], EARTH_RADIUS_M, false).unwrap();
+            || ExactSurface::new(ocean.clone(), [0.0, 0.0], EARTH_RADIUS_M, levels).unwrap();
         let rust = Exact::build(mesh.clone(), surface());
         let device = Device::new(2).unwrap();
         let embree = ExactScene::new(&device, mesh, surface(), BuildOptions::default()).unwrap();
+        (ocean, rust, embree)
+    }
+
+    #[test]
+    fn embree_user_geometry_and_the_rust_prisms_find_the_same_hits() {
+        let (_, rust, embree) = backends(false);
         let (mut hits, mut worst) = (0, 0.0f64);
         for ray in rays(400, 1) {
             match (rust.intersect(&ray), embree.intersect(&ray)) {
@@ -105,19 +112,13 @@ mod cross {
         assert!(hits > 205, "{hits} of 400 rays hit");
         assert!(embree.take_error().is_none());
     }
+
     /// With the levels held (filtered normals), both backends find the same hits on random
     /// surfaces of them: each layer read from one of its levels, or left out.
     #[test]
     fn both_backends_find_the_same_hits_on_the_levels_surfaces() {
-        use vastocean::accel::embree::{BuildOptions, Device, ExactScene};
         use vastocean::ocean::slopes::{ALL_WAVES, NOT_READ};
-        let ocean = sea();
-        let mesh = coarse(&ocean);
-        let surface =
-            || ExactSurface::new(ocean.clone(), [0.0, 0.0], EARTH_RADIUS_M, true).unwrap();
-        let rust = Exact::build(mesh.clone(), surface());
-        let device = Device::new(2).unwrap();
-        let embree = ExactScene::new(&device, mesh, surface(), BuildOptions::default()).unwrap();
+        let (ocean, rust, embree) = backends(true);
         let levels = ocean.levels();
         let mut rng = Rng::keyed(&[21]);
         let rays = rays(300, 2);
@@ -213,15 +214,7 @@ fn an_exact_render_has_no_nans_holes_or_self_hits() {
 fn a_filtered_exact_render_meets_the_resolved_waves() {
     let mut cfg = small_scene(SurfaceKind::Exact);
     cfg.render.normals = NormalMode::Filtered;
-    cfg.validate().unwrap();
-    let r = vastocean::render::pipeline::render_scene(&cfg, false)
-        .unwrap()
-        .report;
-    assert_eq!(r.backend, "rust-exact");
-    assert_eq!(r.nan_count, 0);
-    assert_eq!(r.escaped_below_horizon, 0);
-    assert_eq!(r.self_hits, 0);
-    assert!(r.counters.hits > 1000);
+    let r = render_without_nans_holes_or_self_hits(&cfg);
     assert!(
         r.counters.rough_hits > 100,
         "{} rough hits",
@@ -248,15 +241,24 @@ fn an_exact_render_reads_bilinear_fields() {
     let mut cfg = small_scene(SurfaceKind::Exact);
     assert_ne!(cfg.ocean.interp, vastocean::ocean::Interp::Bilinear);
     cfg.ocean.interp = vastocean::ocean::Interp::Bilinear;
+    render_without_nans_holes_or_self_hits(&cfg);
+}
+
+/// Renders `cfg` on the Rust prisms and checks it has no NaN, no hole below the horizon, no
+/// ray meeting the surface where it left it, and over a thousand hits.
+fn render_without_nans_holes_or_self_hits(
+    cfg: &SceneConfig,
+) -> vastocean::render::report::RenderReport {
     cfg.validate().unwrap();
-    let pre = vastocean::render::pipeline::render_scene(&cfg, false)
+    let r = vastocean::render::pipeline::render_scene(cfg, false)
         .unwrap()
         .report;
-    assert_eq!(pre.backend, "rust-exact");
-    assert_eq!(pre.nan_count, 0);
-    assert_eq!(pre.escaped_below_horizon, 0);
-    assert_eq!(pre.self_hits, 0);
-    assert!(pre.counters.hits > 1000);
+    assert_eq!(r.backend, "rust-exact");
+    assert_eq!(r.nan_count, 0);
+    assert_eq!(r.escaped_below_horizon, 0);
+    assert_eq!(r.self_hits, 0);
+    assert!(r.counters.hits > 1000);
+    r
 }
 
 #[test]

@@ -266,17 +266,16 @@ fn implicit_function_is_the_signed_altitude_above_the_surface() {
     }
 }
 
-#[test]
-fn prisms_hold_the_surface_over_their_triangles() {
-    let ocean = sea(1.0);
-    let origin = [0.0, 0.0];
-    let mesh = coarse_mesh(&ocean, origin);
-    let surface = ExactSurface::new(ocean.clone(), origin, EARTH_R, false).unwrap();
-    let prisms = prisms_of(&mesh, &surface);
-    let sampler = ocean.sampler(origin);
-    let mut rng = Rng::keyed(&[9]);
+/// Every surface point `point` gives at 20 random nominal positions in every 37th triangle of
+/// `mesh` lies in that triangle's prism; how many of those prisms are under 2 m tall.
+fn check_prisms_hold(
+    mesh: &Mesh,
+    prisms: &[([f32; 3], [f32; 3])],
+    rng: &mut Rng,
+    mut point: impl FnMut(&mut Rng, [f64; 2]) -> [f64; 3],
+) -> usize {
     let mut tight = 0;
-    for (tri, prism) in mesh.indices().iter().zip(&prisms).step_by(37) {
+    for (tri, prism) in mesh.indices().iter().zip(prisms).step_by(37) {
         let uv = tri.map(|v| mesh.uvs()[v as usize].map(f64::from));
         for _ in 0..20 {
             let (mut a, mut b) = (rng.f64(), rng.f64());
@@ -286,9 +285,7 @@ fn prisms_hold_the_surface_over_their_triangles() {
             let x: [f64; 2] = std::array::from_fn(|k| {
                 uv[0][k] + a * (uv[1][k] - uv[0][k]) + b * (uv[2][k] - uv[0][k])
             });
-            let f = sampler.fields_f64(x[0], x[1]);
-            let v = [f[field::DX] as f64, f[field::H] as f64, f[field::DZ] as f64];
-            let p = crate::lod::curved_frame_position(x[0], x[1], v, EARTH_R);
+            let p = point(rng, x);
             for k in 0..3 {
                 assert!(
                     prism.0[k] as f64 <= p[k] && p[k] <= prism.1[k] as f64,
@@ -298,6 +295,28 @@ fn prisms_hold_the_surface_over_their_triangles() {
         }
         tight += usize::from(prism.1[1] - prism.0[1] < 2.0);
     }
+    tight
+}
+
+/// The surface point of nominal position `x` on the surface `lod` that `sampler` reads.
+fn surface_point(sampler: &crate::ocean::Sampler, x: [f64; 2], lod: &LevelSet) -> [f64; 3] {
+    let f = sampler.fields_f64_at(x[0], x[1], lod);
+    let v = [f[field::DX] as f64, f[field::H] as f64, f[field::DZ] as f64];
+    crate::lod::curved_frame_position(x[0], x[1], v, EARTH_R)
+}
+
+#[test]
+fn prisms_hold_the_surface_over_their_triangles() {
+    let ocean = sea(1.0);
+    let origin = [0.0, 0.0];
+    let mesh = coarse_mesh(&ocean, origin);
+    let surface = ExactSurface::new(ocean.clone(), origin, EARTH_R, false).unwrap();
+    let prisms = prisms_of(&mesh, &surface);
+    let sampler = ocean.sampler(origin);
+    let mut rng = Rng::keyed(&[9]);
+    let tight = check_prisms_hold(&mesh, &prisms, &mut rng, |_, x| {
+        surface_point(&sampler, x, &ALL_WAVES)
+    });
     assert!(tight > 0, "every prism is taller than 2 m");
 }
 
@@ -361,9 +380,7 @@ fn agree_with_a_dense_march(exact: &Exact, lod_of: &mut dyn FnMut(&mut Rng) -> L
         let lod = lod_of(&mut rng);
         let imp = exact.surface().implicit(&exact.surface().query(&lod).view);
         let x = [40.0 * rng.f64() - 20.0, 40.0 * rng.f64() - 20.0];
-        let f = imp.sampler.fields_f64_at(x[0], x[1], &lod);
-        let v = [f[field::DX] as f64, f[field::H] as f64, f[field::DZ] as f64];
-        let p = crate::lod::curved_frame_position(x[0], x[1], v, EARTH_R);
+        let p = surface_point(&imp.sampler, x, &lod);
         let above = k % 2 == 0;
         let el = (0.5 + 8.0 * rng.f64()).to_radians();
         let az = std::f64::consts::TAU * rng.f64();
@@ -397,13 +414,19 @@ fn agree_with_a_dense_march(exact: &Exact, lod_of: &mut dyn FnMut(&mut Rng) -> L
     hits
 }
 
+/// The test sea and its exact surface in the coarse mesh's prisms around the origin (with the
+/// levels' surfaces too where `levels`).
+fn exact_on_the_sea(levels: bool) -> (Arc<Surface>, Arc<Mesh>, Exact) {
+    let ocean = sea(1.0);
+    let mesh = Arc::new(coarse_mesh(&ocean, [0.0, 0.0]));
+    let surface = ExactSurface::new(ocean.clone(), [0.0, 0.0], EARTH_R, levels).unwrap();
+    let exact = Exact::build(mesh.clone(), surface);
+    (ocean, mesh, exact)
+}
+
 #[test]
 fn hits_agree_with_a_dense_march() {
-    let ocean = sea(1.0);
-    let origin = [0.0, 0.0];
-    let mesh = Arc::new(coarse_mesh(&ocean, origin));
-    let surface = ExactSurface::new(ocean.clone(), origin, EARTH_R, false).unwrap();
-    let exact = Exact::build(mesh, surface);
+    let (_, _, exact) = exact_on_the_sea(false);
     let hits = agree_with_a_dense_march(&exact, &mut |_| ALL_WAVES);
     assert!(hits >= 36, "{hits} of 48 rays hit");
 }
@@ -429,35 +452,12 @@ fn random_lod(ocean: &Surface, rng: &mut Rng) -> LevelSet {
 /// prisms hold every such surface over their triangles.
 #[test]
 fn hits_on_the_levels_surfaces_agree_with_a_dense_march() {
-    let ocean = sea(1.0);
-    let origin = [0.0, 0.0];
-    let mesh = Arc::new(coarse_mesh(&ocean, origin));
-    let surface = ExactSurface::new(ocean.clone(), origin, EARTH_R, true).unwrap();
-    let exact = Exact::build(mesh.clone(), surface);
+    let (ocean, mesh, exact) = exact_on_the_sea(true);
     let hits = agree_with_a_dense_march(&exact, &mut |rng| random_lod(&ocean, rng));
     assert!(hits >= 30, "{hits} of 48 rays hit");
-    let sampler = ocean.sampler(origin).with_levels(ocean.levels());
+    let sampler = ocean.sampler([0.0, 0.0]).with_levels(ocean.levels());
     let mut rng = Rng::keyed(&[12]);
-    for (tri, prism) in mesh.indices().iter().zip(&exact.prisms).step_by(37) {
-        let uv = tri.map(|v| mesh.uvs()[v as usize].map(f64::from));
-        for _ in 0..20 {
-            let lod = random_lod(&ocean, &mut rng);
-            let (mut a, mut b) = (rng.f64(), rng.f64());
-            if a + b > 1.0 {
-                (a, b) = (1.0 - a, 1.0 - b);
-            }
-            let x: [f64; 2] = std::array::from_fn(|k| {
-                uv[0][k] + a * (uv[1][k] - uv[0][k]) + b * (uv[2][k] - uv[0][k])
-            });
-            let f = sampler.fields_f64_at(x[0], x[1], &lod);
-            let v = [f[field::DX] as f64, f[field::H] as f64, f[field::DZ] as f64];
-            let p = crate::lod::curved_frame_position(x[0], x[1], v, EARTH_R);
-            for k in 0..3 {
-                assert!(
-                    prism.0[k] as f64 <= p[k] && p[k] <= prism.1[k] as f64,
-                    "{p:?} outside {prism:?} ({lod:?})"
-                );
-            }
-        }
-    }
+    check_prisms_hold(&mesh, &exact.prisms, &mut rng, |rng, x| {
+        surface_point(&sampler, x, &random_lod(&ocean, rng))
+    });
 }
