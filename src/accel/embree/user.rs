@@ -11,7 +11,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use super::{BuildOptions, Device, EmbreeError, error_name, ffi};
-use crate::accel::exact::{ExactSurface, Query, prisms_of, top_of};
+use crate::accel::exact::{ExactSurface, Query, intersect_each, prisms_of, top_of};
 use crate::accel::{Accel, Hit, Ray};
 use crate::mesh::Mesh;
 use crate::ocean::slopes::{ALL_WAVES, LevelSet};
@@ -211,10 +211,7 @@ impl Accel for ExactScene {
     }
 
     fn intersect_many_at(&self, rays: &[Ray], lods: &[LevelSet], hits: &mut [Option<Hit>]) {
-        assert!(rays.len() == hits.len() && lods.len() == rays.len());
-        for ((r, lod), h) in rays.iter().zip(lods).zip(hits.iter_mut()) {
-            *h = self.intersect_at(r, lod);
-        }
+        intersect_each(rays, lods, hits, |r, lod| self.intersect_at(r, lod));
     }
 
     fn mesh(&self) -> &Mesh {

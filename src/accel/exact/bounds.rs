@@ -84,6 +84,20 @@ impl SlopeBound {
     }
 }
 
+/// Of each layer's `per_level` entries, the one of the level `lod` reads it at (none for a layer
+/// it leaves out).
+#[inline]
+fn at_levels<'a, T>(
+    per_level: &'a [Vec<T>],
+    lod: &'a LevelSet,
+) -> impl Iterator<Item = &'a T> + 'a {
+    per_level
+        .iter()
+        .zip(lod)
+        .filter(|(_, l)| **l != NOT_READ)
+        .map(|(p, &l)| &p[l as usize])
+}
+
 /// The bounds of every layer of a surface, and of each of its levels, around one camera origin.
 pub(super) struct SurfaceBounds {
     /// `pyramids[i][l]`: layer i's level l (0 the layer's own texels).
@@ -129,20 +143,12 @@ impl SurfaceBounds {
     /// The pyramids of the grids the surface `lod` reads.
     #[inline]
     fn read<'a>(&'a self, lod: &'a LevelSet) -> impl Iterator<Item = &'a Pyramid> + 'a {
-        self.pyramids
-            .iter()
-            .zip(lod)
-            .filter(|(_, l)| **l != NOT_READ)
-            .map(|(p, &l)| &p[l as usize])
+        at_levels(&self.pyramids, lod)
     }
 
     /// The limits of the grids the surface `lod` reads.
     fn read_limits<'a>(&'a self, lod: &'a LevelSet) -> impl Iterator<Item = &'a LayerLimits> + 'a {
-        self.limits
-            .iter()
-            .zip(lod)
-            .filter(|(_, l)| **l != NOT_READ)
-            .map(|(p, &l)| &p[l as usize])
+        at_levels(&self.limits, lod)
     }
 
     /// The smallest and largest summed h of the surface `lod` over nominal positions

@@ -8,8 +8,8 @@
 //! surface point, of altitude A(s). F(P) = a(P) - A(s(P)) is positive above the surface and
 //! negative below it, and a ray meets the surface where F changes sign along it. A(s) needs
 //! the x with s(X(x)) = s: Newton's method on x -> s(X(x)), whose Jacobian is I + dD/dx (the
-//! layers' exact FFT derivatives of the displacement), from the last point's x shifted by the
-//! change in s (a ray's next point is close to its last).
+//! layers' exact FFT derivatives of the displacement), started from a Newton step off the last
+//! point along the ray, whose Jacobian is already read (a ray's next point is close to its last).
 
 use crate::lod::{atan_over_arg, curved_frame_position};
 use crate::ocean::slopes::LevelSet;
@@ -52,21 +52,21 @@ pub(super) struct Warm {
 }
 
 /// The Jacobian I + dD/dx of the map from nominal to arc position, `[a11, a12, a22]`, from the
-/// fields at one point, and its determinant.
+/// fields at one point.
 #[inline]
-fn jacobian(f: &crate::ocean::Texel) -> ([f64; 3], f64) {
-    let j = [
+fn jacobian(f: &crate::ocean::Texel) -> [f64; 3] {
+    [
         1.0 + f[field::DDX_DX] as f64,
         f[field::DDX_DZ] as f64,
         1.0 + f[field::DDZ_DZ] as f64,
-    ];
-    (j, j[0] * j[2] - j[1] * j[1])
+    ]
 }
 
-/// `x + J^-1 r` for the symmetric `j` of determinant `det`, or `x + r` (the fixed-point step)
-/// where J is near singular (a fold's neighbourhood).
+/// `x + J^-1 r` for the symmetric Jacobian `j`, or `x + r` (the fixed-point step) where J is
+/// near singular (a fold's neighbourhood).
 #[inline]
-fn newton_step(x: [f64; 2], r: [f64; 2], j: [f64; 3], det: f64) -> [f64; 2] {
+fn newton_step(x: [f64; 2], r: [f64; 2], j: [f64; 3]) -> [f64; 2] {
+    let det = j[0] * j[2] - j[1] * j[1];
     if det > 0.05 {
         [
             x[0] + (j[2] * r[0] - j[1] * r[1]) / det,
@@ -119,13 +119,7 @@ impl Implicit<'_> {
         // step taken with the Jacobian already known, so that most evaluations along a march
         // meet their tolerance at the first read
         let mut x = match warm {
-            Some(w) => {
-                let (j, det) = (
-                    w.jacobian,
-                    w.jacobian[0] * w.jacobian[2] - w.jacobian[1] * w.jacobian[1],
-                );
-                newton_step(w.x, [s[0] - w.s[0], s[1] - w.s[1]], j, det)
-            }
+            Some(w) => newton_step(w.x, [s[0] - w.s[0], s[1] - w.s[1]], w.jacobian),
             None => s,
         };
         let mut alt = 0.0;
@@ -137,12 +131,11 @@ impl Implicit<'_> {
             let r = [s[0] - sq[0], s[1] - sq[1]];
             let res = r[0].abs() + r[1].abs();
             converged = res <= TOL_S || res * self.lip <= 0.1 * (a - aq).abs();
-            let (j, det) = jacobian(&f);
-            jac = j;
+            jac = jacobian(&f);
             if converged || k == MAX_NEWTON {
                 break;
             }
-            x = newton_step(x, r, j, det);
+            x = newton_step(x, r, jac);
         }
         *warm = Some(Warm {
             s,

@@ -416,6 +416,20 @@ impl Exact {
     }
 }
 
+/// Each ray's closest hit on its own surface by `at`: both exact backends'
+/// [`Accel::intersect_many_at`] (a ray's search is one call each, Embree's too).
+pub fn intersect_each(
+    rays: &[Ray],
+    lods: &[LevelSet],
+    hits: &mut [Option<Hit>],
+    at: impl Fn(&Ray, &LevelSet) -> Option<Hit>,
+) {
+    assert!(rays.len() == hits.len() && lods.len() == rays.len());
+    for ((r, lod), h) in rays.iter().zip(lods).zip(hits.iter_mut()) {
+        *h = at(r, lod);
+    }
+}
+
 /// The highest point of any of `prisms`: nothing of the surface lies above it.
 pub fn top_of(prisms: &[([f32; 3], [f32; 3])]) -> f32 {
     prisms
@@ -456,10 +470,7 @@ impl Accel for Exact {
         self.intersect_at(ray, &ALL_WAVES)
     }
     fn intersect_many_at(&self, rays: &[Ray], lods: &[LevelSet], hits: &mut [Option<Hit>]) {
-        assert!(rays.len() == hits.len() && lods.len() == rays.len());
-        for ((r, lod), h) in rays.iter().zip(lods).zip(hits.iter_mut()) {
-            *h = self.intersect_at(r, lod);
-        }
+        intersect_each(rays, lods, hits, |r, lod| self.intersect_at(r, lod));
     }
     fn mesh(&self) -> &Mesh {
         &self.mesh

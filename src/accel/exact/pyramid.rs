@@ -324,23 +324,38 @@ mod tests {
     use super::*;
     use crate::rng::Rng;
 
-    /// Each layer's pyramid queries against the texels a box's reads touch, counted one by
-    /// one: every block value holds them (h's and D's ranges, the steepest differences that
-    /// start at them), and is no looser than the texels of the blocks it joins.
+    /// Each layer's and each of its levels' pyramid queries against the texels a box's reads
+    /// touch, counted one by one: every block value holds them (h's and D's ranges, the
+    /// steepest differences that start at them), and is no looser than the texels of the
+    /// blocks it joins.
     #[test]
     fn every_query_holds_the_texels_of_its_box_one_by_one() {
         let ocean = crate::accel::exact::tests::sea(1.0);
         let sampler = ocean.sampler([321.0, -45.5]);
         let mut rng = Rng::keyed(&[6]);
-        for (layer, &origin) in sampler.layers().iter().zip(sampler.grid_origins()) {
-            let (pyramid, _) = Pyramid::new(layer, origin, layer.inv_dx(), 1.0);
-            let (n, t, dx) = (layer.n() as i64, layer.fields(), layer.dx());
+        // each layer's own texels, and each of its low-passed levels (a grid 2^l times coarser
+        // over the same square, read at the layer's coordinates times 2^-l)
+        let levels = ocean.levels();
+        let grids = sampler
+            .layers()
+            .iter()
+            .zip(sampler.grid_origins())
+            .enumerate()
+            .flat_map(|(i, (layer, &origin))| {
+                (0..=levels.count(i)).map(move |l| {
+                    let grid = if l == 0 { layer } else { levels.level(i, l) };
+                    (layer, grid, origin, 0.5f64.powi(l as i32))
+                })
+            });
+        for (layer, grid, origin, scale) in grids {
+            let (pyramid, _) = Pyramid::new(grid, origin, layer.inv_dx(), scale);
+            let (n, t, dx) = (grid.n() as i64, grid.fields(), grid.dx());
             let at = |x: i64, z: i64| &t[(z.rem_euclid(n) * n + x.rem_euclid(n)) as usize];
             for _ in 0..300 {
-                let size = layer.dx() * 0.3 * 40f64.powf(rng.f64());
+                let size = grid.dx() * 0.3 * 40f64.powf(rng.f64());
                 let (x0, z0) = (rng.f64() * 400.0 - 200.0, rng.f64() * 400.0 - 200.0);
                 let (x1, z1) = (x0 + size, z0 + size * rng.f64());
-                let texel = |v: f64, o: f64| (o + v * layer.inv_dx()).floor() as i64;
+                let texel = |v: f64, o: f64| ((o + v * layer.inv_dx()) * scale).floor() as i64;
                 let (ix0, ix1) = (texel(x0, origin[0]), texel(x1, origin[0]) + 1);
                 let (iz0, iz1) = (texel(z0, origin[1]), texel(z1, origin[1]) + 1);
                 let blocks = pyramid.blocks(x0, x1, z0, z1);
