@@ -18,7 +18,7 @@ pub struct StressArgs {
     #[arg(long, value_delimiter = ',')]
     only: Vec<String>,
     /// What the rays meet in every cell: the mesh, or the exact displaced surface inside the
-    /// coarse tessellation's triangles (cells it cannot render, filtered normals and
+    /// coarse tessellation's triangles (cells it cannot render, vertex normals and
     /// paper-high, are left out; docs/exact.md).
     #[arg(long, value_parser = super::choice::<vastocean::config::SurfaceKind>(), default_value = "mesh")]
     surface: vastocean::config::SurfaceKind,

@@ -136,12 +136,12 @@ impl StressJob {
 
     /// Every cell on the exact displaced surface (`render.surface = "exact"`, docs/exact.md)
     /// instead of the mesh. The cells it cannot render are left out, with the cells that
-    /// compare with them: other normals than mapped (the exact surface shades with mapped or
-    /// geometric normals only) and paper-high (the exact surface is found inside the coarse
-    /// tessellation's triangles; 22 M prisms would test nothing more).
+    /// compare with them: vertex normals (the exact surface has no vertices; it shades with
+    /// mapped, filtered or geometric normals) and paper-high (the exact surface is found inside
+    /// the coarse tessellation's triangles; 22 M prisms would test nothing more).
     pub fn on_exact_surface(&mut self) {
         let can = |c: &Cell| {
-            c.scene.render.normals == NormalMode::Mapped
+            c.scene.render.normals != NormalMode::Vertex
                 && c.scene.lod.preset != LodChoice::PaperHigh
         };
         let dropped: Vec<&str> = self
