@@ -188,7 +188,9 @@ pub fn film_bytes(pixels: u64, batches: usize, keep_states: bool) -> u64 {
 /// them for pass 0 of 1). The samples of passes 0..passes are disjoint and together are
 /// exactly those of one render. A pixel takes `spp` samples, or `spp * boost[pixel]` when a
 /// boost map is given (row-major, one factor a pixel): its further samples continue its
-/// sequences, so its batches stay independent and equally filled.
+/// sequences, so its batches stay independent and equally filled. A boost of 0 leaves a pixel
+/// unsampled (black, variance 0): a pilot that only the analysed rows are read from traces no
+/// other row.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Samples<'a> {
     pub pass: usize,
@@ -318,6 +320,11 @@ pub fn render_image_samples(
                 .map(|x| {
                     let pixel = (y * w + x) as u64;
                     let mut acc = PixelSums::default();
+                    let pixel_spp = samples.of_pixel(pixel as usize, spp);
+                    if samples.pass as u32 >= pixel_spp {
+                        // no sample of this pixel in this pass (a boost of 0 leaves it out)
+                        return acc;
+                    }
                     // Each sequence runs its own rotated R2 pattern, so batches are independent
                     // renders (their noise estimate is unbiased).
                     // (the keys [seed, pixel] every stream of the pixel starts with, hashed once)
@@ -327,16 +334,11 @@ pub fn render_image_samples(
                         (rot.f64(), rot.f64())
                     });
                     // The triangle the pixel's centre ray hits, which its camera rays take
-                    // without the BVH where they can (see `SceneRef::predict_camera_prim`);
-                    // not traced for a pass that has no sample of this render's spp.
+                    // without the BVH where they can (see `SceneRef::predict_camera_prim`).
                     let pixel_rays = camera.pixel_rays(x, y);
                     let centre = pixel_rays.direction(0.5, 0.5);
-                    let pixel_spp = samples.of_pixel(pixel as usize, spp);
-                    let predicted = if (samples.pass as u32) < pixel_spp {
-                        scene.predict_camera_prim(&Ray::new(origin, centre.to_array()), &mut c)
-                    } else {
-                        None
-                    };
+                    let predicted =
+                        scene.predict_camera_prim(&Ray::new(origin, centre.to_array()), &mut c);
                     // The pixel's samples go to the integrator CAMERA_BATCH at a time, so that
                     // their paths go through each stage together.
                     let mut sample_ids = (samples.pass as u32..pixel_spp).step_by(samples.passes);

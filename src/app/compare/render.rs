@@ -62,14 +62,27 @@ pub(super) fn render_scenarios(job: &CompareJob) -> Result<Renders, AppError> {
             ..Setup::default()
         },
     )?;
+    let camera = crate::render::Camera::new(
+        job.scene.camera.projection,
+        job.scene.camera.width,
+        job.scene.camera.aspect,
+    );
     let mut pilots = Vec::new();
+    // The boost map reads the pilots' analysed rows only: no other row is traced.
+    let analysed = sampling::analysed_rows(&camera, job.rows_deg);
     let pilot = |prepared: &Prepared, cfg: &SceneConfig, sc: Scenario| {
         let mut c = cfg.clone();
         c.render.normals = sc.normals();
         c.render.spp = sampling::pilot_spp(cfg.render.spp);
         c.render.seed = cfg.render.seed.wrapping_add(sampling::PILOT_SEED);
         say(format!("pilot of {} at {} spp", sc.name(), c.render.spp));
-        prepared.render(&c, job.progress).map(|r| r.film)
+        let samples = Samples {
+            boost: Some(&analysed),
+            ..Samples::ALL
+        };
+        prepared
+            .render_samples(&c, 0, samples, false, job.progress)
+            .map(|(r, _)| r.film)
     };
     let boosting = job.max_boost > 1;
     if boosting {
@@ -89,11 +102,6 @@ pub(super) fn render_scenarios(job: &CompareJob) -> Result<Renders, AppError> {
             ..Setup::default()
         },
     )?;
-    let camera = crate::render::Camera::new(
-        job.scene.camera.projection,
-        job.scene.camera.width,
-        job.scene.camera.aspect,
-    );
     let boost = if boosting {
         let t = Instant::now();
         pilots.push(pilot(&high, &high_cfg, Scenario::HighMapped)?);

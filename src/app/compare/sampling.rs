@@ -57,6 +57,17 @@ pub fn pilot_spp(spp: u32) -> u32 {
     (spp / 4).max(8)
 }
 
+/// A boost map that samples the rows `rows_deg` of `camera`'s image (factor 1) and leaves every
+/// other row out (0): all of a pilot that [`boost_map`] reads, whose dilation stays inside them.
+pub fn analysed_rows(camera: &Camera, rows_deg: (f64, f64)) -> Vec<u16> {
+    let w = camera.width;
+    let mut map = vec![0u16; w * camera.height];
+    for y in camera.rows_between(rows_deg) {
+        map[y * w..(y + 1) * w].fill(1);
+    }
+    map
+}
+
 /// The boost map from the pilots: each analysed pixel's noise (the per-sample variance of its
 /// luminance, the largest over the pilots and its neighbourhood) against the median analysed
 /// pixel's, v / v0,
