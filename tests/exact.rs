@@ -292,6 +292,69 @@ fn compare_refuses_an_exact_scene_and_checks_its_exact_scenario_before_any_work(
     assert!(!out.join("summary.json").exists());
 }
 
+/// `compare --exact --filtered` renders the exact surface with mapped and with filtered
+/// normals, last, with their statistics; and a scene prepared on the exact surface without
+/// the levels' surfaces refuses a filtered render, whose paths would meet the whole sea.
+#[test]
+fn compare_renders_the_exact_surface_with_filtered_normals_and_a_bare_surface_refuses_them() {
+    use vastocean::app::compare::{CompareJob, Scenario, run};
+    use vastocean::config::{LodChoice, LodConfig, NormalMode, Projection};
+    let mut scene = SceneConfig::default();
+    scene.camera.width = 128;
+    scene.camera.projection = Projection::Equirect {
+        band_deg: Some((1.0, -6.0)),
+    };
+    scene.render.spp = 8;
+    scene.render.threads = 2;
+    scene.render.backend = Backend::Rust;
+    let out = std::env::temp_dir().join("vastocean-compare-exact-filtered");
+    let _ = std::fs::remove_dir_all(&out);
+    let job = CompareJob {
+        scene: scene.clone(),
+        high: LodConfig {
+            preset: LodChoice::Custom,
+            near_size_m: Some(0.6),
+            double_distance_m: Some(18.0),
+            ..LodConfig::default()
+        },
+        low: LodConfig::default(),
+        rows_deg: (0.0, -5.0),
+        max_boost: 1,
+        filtered: true,
+        exact: true,
+        against: vastocean::app::compare::Against::PaperHigh,
+        truth_boost: vastocean::app::compare::DEFAULT_TRUTH_BOOST,
+        truth_from: None,
+        out: out.clone(),
+        progress: false,
+    };
+    let names = job.scenarios();
+    assert_eq!(
+        names[names.len() - 2..],
+        [Scenario::LowExact, Scenario::LowExactFiltered]
+    );
+    let s = run(&job).unwrap();
+    assert_eq!(s.scenarios.len(), 8);
+    for v in [
+        s.std_low_exact_corrected,
+        s.std_low_exact_filtered_corrected,
+    ] {
+        assert!(v.is_some_and(|v| v.is_finite() && v >= 0.0), "{v:?}");
+    }
+    assert!(out.join("low_exact_filtered.exr").is_file());
+    let _ = std::fs::remove_dir_all(&out);
+
+    // prepared with mapped normals: no levels' surfaces, so a filtered render is refused
+    let mut cfg = small_scene(SurfaceKind::Exact);
+    let bare = vastocean::render::pipeline::prepare(&cfg).unwrap();
+    cfg.render.normals = NormalMode::Filtered;
+    let Err(e) = bare.render(&cfg, false) else {
+        panic!("a filtered render on a bare exact surface was not refused");
+    };
+    let e = e.to_string();
+    assert!(e.contains("levels"), "{e}");
+}
+
 #[test]
 fn compare_against_truth_measures_every_scenario_against_a_truth_free_of_wrong_side_events() {
     use vastocean::app::compare::{Against, CompareJob, Scenario, run};

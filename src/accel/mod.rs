@@ -106,6 +106,12 @@ pub trait Accel: Send + Sync {
     fn exact_surface(&self) -> bool {
         false
     }
+    /// For [`Accel::exact_surface`] backends: whether rays may meet the surfaces of the
+    /// layers' low-passed levels (built for filtered normals); without them every ray meets
+    /// the whole sea.
+    fn exact_levels(&self) -> bool {
+        false
+    }
     /// For [`Accel::exact_surface`] backends: the unit geometric normal of the surface `lod`
     /// at a hit on it (the displaced surface's own tangent plane, air side up), in place of a
     /// triangle's, and how far from the surface the hit point may lie beyond its f32

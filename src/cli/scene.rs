@@ -383,7 +383,8 @@ pub struct CompareArgs {
     #[arg(long)]
     pub filtered: bool,
     /// Also render the exact displaced surface inside the low tessellation's triangles, mapped
-    /// normals: scenario `low_exact`, with its statistics beside the paper's (docs/exact.md).
+    /// normals: scenario `low_exact`, with its statistics beside the paper's (docs/exact.md);
+    /// with --filtered also with filtered normals, scenario `low_exact_filtered`.
     #[arg(long)]
     pub exact: bool,
     /// What every scenario is measured against: the paper's baseline (paper-high, its high

@@ -11,6 +11,26 @@ use crate::image_io::ImageError;
 use crate::lod::LodError;
 use crate::ocean::OceanError;
 
+/// Filtered normals on the exact surface need the surfaces of the layers' levels, which a scene
+/// prepared with other normals did not build: a render asking for them is refused, where its
+/// paths would meet the whole sea and shade as if they met their drawn levels.
+pub(super) fn check_exact_levels(
+    accel: &dyn crate::accel::Accel,
+    normals: crate::config::NormalMode,
+) -> Result<(), RenderError> {
+    if normals == crate::config::NormalMode::Filtered
+        && accel.exact_surface()
+        && !accel.exact_levels()
+    {
+        return Err(RenderError::Exact(
+            "filtered normals on an exact surface prepared without the levels' surfaces: \
+             prepare the scene with render.normals = \"filtered\""
+                .into(),
+        ));
+    }
+    Ok(())
+}
+
 #[derive(Debug, Error)]
 pub enum RenderError {
     #[error(transparent)]

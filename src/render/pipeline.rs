@@ -404,6 +404,7 @@ impl Prepared {
         let cfg = placed.as_ref();
         let camera = Camera::new(cfg.camera.aimed(), cfg.camera.width, cfg.camera.aspect);
         let filtered = cfg.render.normals == crate::config::NormalMode::Filtered;
+        super::limits::check_exact_levels(self.accel.as_ref(), cfg.render.normals)?;
         let levels = self.ocean.levels_built();
         check_memory(
             cfg,

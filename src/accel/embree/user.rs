@@ -226,6 +226,10 @@ impl Accel for ExactScene {
         true
     }
 
+    fn exact_levels(&self) -> bool {
+        self.data.surface.levels()
+    }
+
     fn surface_normal(&self, hit: &Hit, lod: &LevelSet) -> Option<([f32; 3], f32)> {
         let s = &self.data.surface;
         let n = s.normal_at(self.interpolate_uv(hit).map(f64::from), lod);

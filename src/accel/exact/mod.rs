@@ -146,6 +146,11 @@ impl ExactSurface {
         })
     }
 
+    /// Whether rays may meet the levels' surfaces (built for filtered normals).
+    pub fn levels(&self) -> bool {
+        self.levels
+    }
+
     /// A ray's search of the surface `lod` (every layer whole, [`ALL_WAVES`], without levels).
     pub fn query(&self, lod: &LevelSet) -> Query {
         let view = if *lod == ALL_WAVES || !self.levels {
@@ -480,6 +485,10 @@ impl Accel for Exact {
     }
     fn exact_surface(&self) -> bool {
         true
+    }
+
+    fn exact_levels(&self) -> bool {
+        self.surface.levels
     }
     fn surface_normal(&self, hit: &Hit, lod: &LevelSet) -> Option<([f32; 3], f32)> {
         let n = self

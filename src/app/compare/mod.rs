@@ -35,7 +35,8 @@ pub struct CompareJob {
     #[serde(default)]
     pub filtered: bool,
     /// Also render the low tessellation's exact displaced surface with mapped normals
-    /// (scenario `low_exact`, last; docs/exact.md).
+    /// (scenario `low_exact`; docs/exact.md), and with `filtered` with filtered normals as well
+    /// (`low_exact_filtered`, last).
     #[serde(default)]
     pub exact: bool,
     /// What the scenarios are measured against: the paper's baseline, or that and the truth.
@@ -69,6 +70,9 @@ pub enum Scenario {
     /// Beyond the paper, with `--exact`: the exact displaced surface inside the low
     /// tessellation's triangles, mapped normals.
     LowExact,
+    /// With `--exact --filtered`: the exact surface with filtered normals (each path meets the
+    /// waves its footprint resolves; docs/exact.md).
+    LowExactFiltered,
 }
 
 impl Scenario {
@@ -90,6 +94,7 @@ impl Scenario {
             Scenario::NoiseFloor => "noise_floor",
             Scenario::LowFiltered => "low_filtered",
             Scenario::LowExact => "low_exact",
+            Scenario::LowExactFiltered => "low_exact_filtered",
         }
     }
 
@@ -100,13 +105,19 @@ impl Scenario {
                 | Scenario::LowUnmapped
                 | Scenario::LowFiltered
                 | Scenario::LowExact
+                | Scenario::LowExactFiltered
         )
+    }
+
+    /// Whether the scenario renders the exact surface (in the low tessellation).
+    fn exact(self) -> bool {
+        matches!(self, Scenario::LowExact | Scenario::LowExactFiltered)
     }
 
     fn normals(self) -> NormalMode {
         match self {
             Scenario::HighUnmapped | Scenario::LowUnmapped => NormalMode::Vertex,
-            Scenario::LowFiltered => NormalMode::Filtered,
+            Scenario::LowFiltered | Scenario::LowExactFiltered => NormalMode::Filtered,
             _ => NormalMode::Mapped,
         }
     }
@@ -123,7 +134,7 @@ impl Scenario {
 
 impl CompareJob {
     /// The scenarios this job renders: the paper's four and the noise floor, then
-    /// `low_filtered` and `low_exact` if asked for.
+    /// `low_filtered`, `low_exact` and `low_exact_filtered` if asked for.
     pub fn scenarios(&self) -> Vec<Scenario> {
         let mut s = Scenario::ALL.to_vec();
         if self.filtered {
@@ -131,6 +142,9 @@ impl CompareJob {
         }
         if self.exact {
             s.push(Scenario::LowExact);
+        }
+        if self.exact && self.filtered {
+            s.push(Scenario::LowExactFiltered);
         }
         s
     }
@@ -188,6 +202,10 @@ pub struct CompareSummary {
     pub std_low_exact: Option<f64>,
     pub std_low_exact_corrected: Option<f64>,
     pub mean_low_exact: Option<f64>,
+    /// With `--exact --filtered`: the same for `low_exact_filtered`.
+    pub std_low_exact_filtered: Option<f64>,
+    pub std_low_exact_filtered_corrected: Option<f64>,
+    pub mean_low_exact_filtered: Option<f64>,
     /// std(low unmapped) / std(low mapped) of the paper's statistic (the paper: 5 to 10 for
     /// its case 87).
     pub improvement_ratio: f64,
@@ -410,9 +428,10 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
     let e = &estimates.scenarios;
     // the optional scenarios' estimates, by name
     let optional = |sc: Scenario| e.iter().find(|s| s.name == sc.name());
-    let (filtered, exact) = (
+    let (filtered, exact, exact_filtered) = (
         optional(Scenario::LowFiltered),
         optional(Scenario::LowExact),
+        optional(Scenario::LowExactFiltered),
     );
     // RMS over the analysed rows of the standard error of the baseline's pixel luminance.
     let rows = runs[0].1.camera.rows_between(job.rows_deg);
@@ -459,6 +478,9 @@ pub fn run(job: &CompareJob) -> Result<CompareSummary, AppError> {
         std_low_exact: exact.map(|s| s.std),
         std_low_exact_corrected: exact.map(|s| s.std_corrected.value),
         mean_low_exact: exact.map(|s| s.mean.value),
+        std_low_exact_filtered: exact_filtered.map(|s| s.std),
+        std_low_exact_filtered_corrected: exact_filtered.map(|s| s.std_corrected.value),
+        mean_low_exact_filtered: exact_filtered.map(|s| s.mean.value),
         improvement_ratio: improvement.plain,
         std_high_unmapped_corrected: e[0].std_corrected.value,
         std_low_mapped_corrected: e[1].std_corrected.value,

@@ -41,6 +41,9 @@ pub struct Variances {
     /// With `--exact`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub low_exact: Option<f64>,
+    /// With `--exact --filtered`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub low_exact_filtered: Option<f64>,
 }
 
 /// `summary.json` of a comparison over realizations. JSON has no infinity: an unbounded
@@ -73,6 +76,9 @@ pub struct RealizationsSummary {
     /// With `--exact`: the exact surface in the low tessellation, pooled the same way.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub std_low_exact_corrected: Option<Interval>,
+    /// With `--exact --filtered`: the exact surface with filtered normals, pooled the same way.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub std_low_exact_filtered_corrected: Option<Interval>,
     pub rows_deg: (f64, f64),
     pub spp: u32,
     pub seconds_total: f64,
@@ -138,6 +144,7 @@ fn pool(job: &CompareJob, runs: Vec<(u64, CompareSummary)>, seconds: f64) -> Rea
                     noise_floor: v(3),
                     low_filtered: named(super::Scenario::LowFiltered),
                     low_exact: named(super::Scenario::LowExact),
+                    low_exact_filtered: named(super::Scenario::LowExactFiltered),
                 },
                 summary: job
                     .out
@@ -178,6 +185,7 @@ fn pool(job: &CompareJob, runs: Vec<(u64, CompareSummary)>, seconds: f64) -> Rea
         std_noise_floor_corrected: pooled_std(&column(|v| v.noise_floor)),
         std_low_filtered_corrected: optional(|v| v.low_filtered),
         std_low_exact_corrected: optional(|v| v.low_exact),
+        std_low_exact_filtered_corrected: optional(|v| v.low_exact_filtered),
         realizations,
         rows_deg: job.rows_deg,
         spp: job.scene.render.spp,
@@ -222,6 +230,9 @@ impl fmt::Display for RealizationsSummary {
         }
         if let Some(exact) = &self.std_low_exact_corrected {
             writeln!(f, "  low exact {}", std(exact))?;
+        }
+        if let Some(exact) = &self.std_low_exact_filtered_corrected {
+            writeln!(f, "  low exact filtered {}", std(exact))?;
         }
         let pooled = Interval {
             value: self.improvement_ratio_corrected,

@@ -29,11 +29,18 @@ pub(super) fn with_lod(scene: &SceneConfig, lod: &LodConfig) -> SceneConfig {
     }
 }
 
-/// The scene of scenario `low_exact`: the low tessellation's exact surface, mapped normals.
+/// The scene of scenarios `low_exact` and `low_exact_filtered`: the low tessellation's exact
+/// surface, prepared with filtered normals (its levels' surfaces built) when the second is
+/// rendered.
 pub(super) fn exact_scene(job: &CompareJob) -> SceneConfig {
     let mut c = with_lod(&job.scene, &job.low);
     c.render.surface = SurfaceKind::Exact;
-    c.render.normals = NormalMode::Mapped;
+    // the levels' surfaces are built only for a filtered scenario
+    c.render.normals = if job.exact && job.filtered {
+        NormalMode::Filtered
+    } else {
+        NormalMode::Mapped
+    };
     c
 }
 
@@ -141,7 +148,7 @@ pub(super) fn render_scenarios(job: &CompareJob) -> Result<Renders, AppError> {
         let wanted: Vec<Scenario> = job
             .scenarios()
             .into_iter()
-            .filter(|s| s.high() == is_high && (*s == Scenario::LowExact) == exact)
+            .filter(|s| s.high() == is_high && s.exact() == exact)
             .collect();
         let with_truth = exact && job.against == truth::Against::Truth && job.truth_from.is_none();
         if wanted.is_empty() && !with_truth {

@@ -153,7 +153,7 @@ impl fmt::Display for CompareSummary {
         for e in &self.estimates.scenarios {
             writeln!(
                 f,
-                "  {:<14} {:>9.5} | {} | {:.5} | {:>2} of {} rows noisier than their signal{}",
+                "  {:<18} {:>9.5} | {} | {:.5} | {:>2} of {} rows noisier than their signal{}",
                 e.name,
                 e.std,
                 if e.significant {
@@ -225,7 +225,7 @@ impl fmt::Display for CompareSummary {
             for e in &est.scenarios {
                 writeln!(
                     f,
-                    "  {:<14} {} | {}",
+                    "  {:<18} {} | {}",
                     e.name,
                     ci(&e.std_corrected),
                     ci(&e.mean)
@@ -235,7 +235,7 @@ impl fmt::Display for CompareSummary {
         for sc in &self.scenarios {
             writeln!(
                 f,
-                "  {:<14} {:>9} triangles  tessellation {:.2} s  BVH {:.2} s  render {:.2} s",
+                "  {:<18} {:>9} triangles  tessellation {:.2} s  BVH {:.2} s  render {:.2} s",
                 sc.name.name(),
                 sc.triangles,
                 sc.seconds_tessellation,
@@ -246,7 +246,7 @@ impl fmt::Display for CompareSummary {
         if let Some(t) = &self.truth {
             writeln!(
                 f,
-                "  {:<14} exact surface       BVH {:.2} s  render {:.2} s  ({} samples)",
+                "  {:<18} exact surface       BVH {:.2} s  render {:.2} s  ({} samples)",
                 "truth", t.seconds_build, t.seconds_render, t.samples
             )?;
         }
