@@ -292,20 +292,26 @@ fn compare_refuses_an_exact_scene_and_checks_its_exact_scenario_before_any_work(
     assert!(!out.join("summary.json").exists());
 }
 
+/// The comparisons' scene: the default sea, the band +1 to -6 degrees at 128 px, 8 spp.
+fn band_scene() -> SceneConfig {
+    let mut scene = SceneConfig::default();
+    scene.camera.width = 128;
+    scene.camera.projection = vastocean::config::Projection::Equirect {
+        band_deg: Some((1.0, -6.0)),
+    };
+    scene.render.spp = 8;
+    scene.render.threads = 2;
+    scene
+}
+
 /// `compare --exact --filtered` renders the exact surface with mapped and with filtered
 /// normals, last, with their statistics; and a scene prepared on the exact surface without
 /// the levels' surfaces refuses a filtered render, whose paths would meet the whole sea.
 #[test]
 fn compare_renders_the_exact_surface_with_filtered_normals_and_a_bare_surface_refuses_them() {
     use vastocean::app::compare::{CompareJob, Scenario, run};
-    use vastocean::config::{LodChoice, LodConfig, NormalMode, Projection};
-    let mut scene = SceneConfig::default();
-    scene.camera.width = 128;
-    scene.camera.projection = Projection::Equirect {
-        band_deg: Some((1.0, -6.0)),
-    };
-    scene.render.spp = 8;
-    scene.render.threads = 2;
+    use vastocean::config::{LodChoice, LodConfig, NormalMode};
+    let mut scene = band_scene();
     scene.render.backend = Backend::Rust;
     let out = std::env::temp_dir().join("vastocean-compare-exact-filtered");
     let _ = std::fs::remove_dir_all(&out);
@@ -358,14 +364,8 @@ fn compare_renders_the_exact_surface_with_filtered_normals_and_a_bare_surface_re
 #[test]
 fn compare_against_truth_measures_every_scenario_against_a_truth_free_of_wrong_side_events() {
     use vastocean::app::compare::{Against, CompareJob, Scenario, run};
-    use vastocean::config::{LodChoice, LodConfig, Projection};
-    let mut scene = SceneConfig::default();
-    scene.camera.width = 128;
-    scene.camera.projection = Projection::Equirect {
-        band_deg: Some((1.0, -6.0)),
-    };
-    scene.render.spp = 8;
-    scene.render.threads = 2;
+    use vastocean::config::{LodChoice, LodConfig};
+    let scene = band_scene();
     let out = std::env::temp_dir().join("vastocean-compare-truth");
     let again = std::env::temp_dir().join("vastocean-compare-truth-reused");
     for d in [&out, &again] {
