@@ -189,8 +189,7 @@ pub fn film_bytes(pixels: u64, batches: usize, keep_states: bool) -> u64 {
 /// exactly those of one render. A pixel takes `spp` samples, or `spp * boost[pixel]` when a
 /// boost map is given (row-major, one factor a pixel): its further samples continue its
 /// sequences, so its batches stay independent and equally filled. A boost of 0 leaves a pixel
-/// unsampled (black, variance 0): a pilot that only the analysed rows are read from traces no
-/// other row.
+/// unsampled (black, variance 0), so a pilot of which only some rows are read traces no other.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Samples<'a> {
     pub pass: usize,

@@ -23,8 +23,8 @@ pub(super) fn check_exact_levels(
         && !accel.exact_levels()
     {
         return Err(RenderError::Exact(
-            "filtered normals on an exact surface prepared without the levels' surfaces: \
-             prepare the scene with render.normals = \"filtered\""
+            "filtered normals need the levels' surfaces, and this scene was prepared without \
+             them: prepare it with render.normals = \"filtered\""
                 .into(),
         ));
     }
