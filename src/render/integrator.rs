@@ -278,11 +278,11 @@ impl SceneRef<'_> {
         let mut hits = [None; CAMERA_BATCH];
         let exact_lods = self.exact_lods(settings);
         match predicted {
-            None if exact_lods => {
-                self.accel
-                    .intersect_many_at(&traced[..m], &traced_lod[..m], &mut hits[..m])
-            }
-            None => self.accel.intersect_many(&traced[..m], &mut hits[..m]),
+            // (each ray meets its path's surface: every wave's but on the exact surface of a
+            // filtered render, and a mesh has only one)
+            None => self
+                .accel
+                .intersect_many_at(&traced[..m], &traced_lod[..m], &mut hits[..m]),
             Some(prim) => {
                 // Rays that meet the predicted triangle steeply enough have their hit; the
                 // rest go to the BVH together.
@@ -430,7 +430,6 @@ impl SceneRef<'_> {
         let direct = self.sun_through(
             &suns[..n_shaded + n_object],
             &sun_lods[..n_shaded + n_object],
-            exact_lods,
             c,
         );
 

@@ -254,12 +254,12 @@ impl SceneRef<'_> {
 
     /// The sun light sampled at up to [`CAMERA_BATCH`] hits, `suns[j]` = (shadow ray, light):
     /// the shadow rays traced together against the sea (those rising clear of its mesh are
-    /// not) and the objects, each blocked one dark.
+    /// not), each meeting the surface `lods[j]` (its path's), and the objects, each blocked
+    /// one dark.
     pub(super) fn sun_through(
         &self,
         suns: &[Option<(Ray, Vec3)>],
         lods: &[LevelSet],
-        exact_lods: bool,
         c: &mut Counters,
     ) -> [Vec3; CAMERA_BATCH] {
         let mut direct = [Vec3::ZERO; CAMERA_BATCH];
@@ -294,13 +294,9 @@ impl SceneRef<'_> {
         if n > 0 {
             c.sun_rays += n as u64;
             let mut hits = [None; CAMERA_BATCH];
-            if exact_lods {
-                // (a sun ray leaves its hit's surface, which is its path's)
-                self.accel
-                    .intersect_many_at(&rays[..n], &ray_lods[..n], &mut hits[..n]);
-            } else {
-                self.accel.intersect_many(&rays[..n], &mut hits[..n]);
-            }
+            // (a sun ray leaves its hit's surface, which is its path's)
+            self.accel
+                .intersect_many_at(&rays[..n], &ray_lods[..n], &mut hits[..n]);
             for (&j, h) in of[..n].iter().zip(&hits[..n]) {
                 if h.is_some() {
                     c.sun_occluded += 1;
