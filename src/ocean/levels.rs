@@ -87,8 +87,8 @@ impl<'a> Sampler<'a> {
 
     /// [`Sampler::fields_f64`] of the surface `levels`: layer i read from its level
     /// `levels[i]` alone (at the grid coordinates [`Sampler::normals_split`] reads it at), or
-    /// left out. With every level 0, bit for bit [`Sampler::fields_f64`]. A level past 0 needs
-    /// a sampler [`Sampler::with_levels`].
+    /// left out; with every level 0 ([`super::slopes::ALL_WAVES`]), [`Sampler::fields_f64`].
+    /// A level past 0 needs a sampler [`Sampler::with_levels`].
     #[inline]
     pub fn fields_f64_at(&self, u: f64, v: f64, levels: &LevelSet) -> Texel {
         let mut f = [0.0f32; FIELD_COUNT];

@@ -223,13 +223,7 @@ impl Sampler<'_> {
     /// position is an f32.
     #[inline]
     pub fn fields_f64(&self, u: f64, v: f64) -> Texel {
-        let mut f = [0.0f32; FIELD_COUNT];
-        for (layer, o) in self.layers.iter().zip(&self.origin) {
-            let px = o[0] + u * layer.inv_dx();
-            let pz = o[1] + v * layer.inv_dx();
-            add_texel(&mut f, &layer.read(px, pz, self.interp));
-        }
-        f
+        self.fields_f64_at(u, v, &super::slopes::ALL_WAVES)
     }
 
     /// Per layer: the camera origin modulo the layer's extent, in grid units (a nominal
