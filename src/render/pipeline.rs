@@ -226,14 +226,17 @@ pub fn prepare_with(cfg: &SceneConfig, setup: Setup) -> Result<Prepared, RenderE
         (sky, built)
     });
     let sky = sky?;
-    let (ocean, seconds_ocean, mesh, stats, seconds_tessellation) = built?;
+    let (ocean, seconds_ocean, mesh, stats, mut seconds_tessellation) = built?;
     let exact = cfg.render.surface == SurfaceKind::Exact;
-    // (the exact surface's bounds are its prisms', set below)
+    // (the exact surface's bounds are its prisms', set below; the mesh's count as its
+    // tessellation's time)
+    let t = Instant::now();
     let (skip_slope, mut skip_above_y) = if exact {
         (None, None)
     } else {
         pool.install(|| (max_slope(&mesh), highest_vertex_y(&mesh)))
     };
+    seconds_tessellation += t.elapsed().as_secs_f64();
     let mesh = Arc::new(mesh);
     let bar = phase(
         progress,
