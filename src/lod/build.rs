@@ -106,13 +106,17 @@ impl Geometry {
     fn attributes(&self, vi: &VertexIndex, earth_r: f64, sampler: &Sampler) -> Attributes {
         let vertices: usize = vi.row_counts.iter().sum();
         // One spare element: Mesh pads these for Embree without reallocating. Zeroed
-        // allocations (calloc), so that the pages are first touched where each row is written,
-        // on every core, not cleared on one thread first.
+        // allocations (calloc), not cleared on one thread first; their pages are mapped in on
+        // every core in one call each (`prefault`), not by a fault per page as rows are
+        // written.
         let mut positions = vec![[0.0f32; 3]; vertices + 1];
         positions.truncate(vertices);
         let mut normals = vec![[0.0f32; 3]; vertices];
         let mut uvs = vec![[0.0f32; 2]; vertices + 1];
         uvs.truncate(vertices);
+        crate::memory::prefault(&mut positions);
+        crate::memory::prefault(&mut normals);
+        crate::memory::prefault(&mut uvs);
         let pos_chunks = split_by(&mut positions, &vi.row_counts);
         let nrm_chunks = split_by(&mut normals, &vi.row_counts);
         let uv_chunks = split_by(&mut uvs, &vi.row_counts);
@@ -172,6 +176,7 @@ impl Geometry {
             return Err(LodError::Empty(self.reach));
         }
         let mut indices = vec![[0u32; 3]; triangles];
+        crate::memory::prefault(&mut indices);
         // A point on a ring's hole edge is the finer ring's vertex.
         let lookup = |(k, x, z): V| -> u32 {
             let (k, x, z) = if k > 0 && x.abs().max(z.abs()) == self.rings[k].a {
