@@ -56,7 +56,7 @@ pub use bootstrap::REPLICATES;
 use interval::root;
 pub use interval::{CONFIDENCE, Interval};
 pub(crate) use interval::{median, quantile};
-use moments::{Field, K, RowSums};
+use moments::{Field, K, RowSums, Weights};
 
 /// Azimuthal length of a bootstrap block, degrees.
 pub const BLOCK_DEG: f64 = 5.625;
@@ -210,11 +210,12 @@ fn rows_under(table: &moments::Table, draw: &[[f64; K]]) -> Vec<Vec<RowValue>> {
                 .map(|blocks| {
                     let mut sums = [RowSums::default(); 3];
                     for (m, c) in blocks.iter().zip(draw) {
+                        let weights = Weights::new(c, w, table.k);
                         for (s, f) in
                             sums.iter_mut()
                                 .zip([Field::Difference, Field::Trend, Field::Residual])
                         {
-                            s.add(m.field(f), m.n, c, w, table.k, 1.0);
+                            s.add_weighted(m.field(f), m.n, &weights, 1.0);
                         }
                     }
                     RowValue::new(&sums[0], &sums[1], &sums[2])

@@ -1,7 +1,7 @@
 //! What the estimator reads from the films, once: for every scenario, analysed row and azimuth
 //! block, the sums and cross products of the batch differences D_b = Y_S,b - Y_0,b over the
 //! block's pixels. Every statistic, the point estimate and each bootstrap replicate alike, is
-//! a weighted sum of these (see [`RowSums::add`]).
+//! a weighted sum of these (see [`RowSums::add_weighted`]).
 
 use rayon::prelude::*;
 
@@ -70,7 +70,7 @@ impl BlockMoments {
 /// The sums that make one row's statistics under a set of weights: pixels, and the sums over
 /// pixels of the unbiased estimate of mu(x)^2 (P, from products of distinct batches), of the
 /// weighted mean difference A and of A^2, and of the noise variance of the film's own mean
-/// (see [`RowSums::add`]).
+/// (see [`RowSums::add_weighted`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct RowSums {
     pub n: f64,
@@ -80,37 +80,80 @@ pub(super) struct RowSums {
     pub v: f64,
 }
 
+/// A block's batch weights c_b w_b of [`RowSums::add_weighted`] and their sums, the same for each
+/// field of the block.
+pub(super) struct Weights {
+    k: usize,
+    cw: [f64; K],
+    sum: f64,
+    sum2: f64,
+    c2w: f64,
+    wsum: f64,
+}
+
+impl Weights {
+    pub fn new(c: &[f64; K], w: &[f64; K], k: usize) -> Weights {
+        let cw: [f64; K] = std::array::from_fn(|b| c[b] * w[b]);
+        let (mut sum, mut sum2, mut c2w, mut wsum) = (0.0, 0.0, 0.0, 0.0);
+        for b in 0..k {
+            sum += cw[b];
+            sum2 += cw[b] * cw[b];
+            c2w += c[b] * c[b] * w[b];
+            wsum += w[b];
+        }
+        Weights {
+            k,
+            cw,
+            sum,
+            sum2,
+            c2w,
+            wsum,
+        }
+    }
+}
+
 impl RowSums {
-    /// Adds a block of `n` pixels counted `times` times, in which batch b weighs c_b w_b: `w`
-    /// the films' batch weights (their sample counts, or equal), `c` the bootstrap's draw
-    /// (at least two non-zero; all 1 for the point estimate). With those weights the pixel's
-    /// mean is A = sum c_b w_b D_b / sum c_b w_b and P = sum_{b != c} (c w)_b (c w)_c D_b D_c /
-    /// sum_{b != c} (c w)_b (c w)_c: the batches are independent, so E[P] = mu^2 and
+    /// [`RowSums::add_weighted`] with the block's weights computed here.
+    #[cfg(test)]
+    pub fn add(&mut self, m: &Gram, n: f64, c: &[f64; K], w: &[f64; K], k: usize, times: f64) {
+        self.add_weighted(m, n, &Weights::new(c, w, k), times);
+    }
+
+    /// Adds a block of `n` pixels counted `times` times, in which batch b weighs c_b w_b
+    /// ([`Weights::new`], once for every field of a block): `w` the films' batch weights (their
+    /// sample counts, or equal), `c` the bootstrap's draw (at least two non-zero; all 1 for the
+    /// point estimate). With those weights the pixel's mean is A = sum c_b w_b D_b / sum c_b w_b
+    /// and P = sum_{b != c} (c w)_b (c w)_c D_b D_c / sum_{b != c} (c w)_b (c w)_c: the batches are independent, so E[P] = mu^2 and
     /// E[A^2 - P] = Var(A), whatever the weights. Var(A) is the noise of the replicate's
     /// weighting, not of the film's: with batch means of variance s^2 / w_b it is
     /// s^2 sum c^2 w / (sum c w)^2, so `v` gathers (A^2 - P) (sum c w)^2 / (sum c^2 w sum w),
     /// the film's own noise variance s^2 / sum w however the batches were drawn.
-    pub fn add(&mut self, m: &Gram, n: f64, c: &[f64; K], w: &[f64; K], k: usize, times: f64) {
-        let (mut sum, mut sum2, mut cs, mut cgc, mut diag) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        let (mut c2w, mut wsum) = (0.0, 0.0);
-        let cw: [f64; K] = std::array::from_fn(|b| c[b] * w[b]);
+    pub fn add_weighted(&mut self, m: &Gram, n: f64, wt: &Weights, times: f64) {
+        let (k, cw) = (wt.k, &wt.cw);
+        // (G cw)_b, each summed over j in order as a row's sum would be (from -0.0, as `sum`
+        // starts), but a column at a time, so that the K lanes b run side by side: G is
+        // symmetric bit for bit, so column j is row j. (Row by row, each sum was a chain of
+        // dependent additions, and this product most of a comparison's statistics.)
+        let mut gcw = [-0.0f64; K];
+        for (&x, row) in cw[..k].iter().zip(&m.g) {
+            for (acc, &g) in gcw.iter_mut().zip(row) {
+                *acc += x * g;
+            }
+        }
+        let (mut cs, mut cgc, mut diag) = (0.0, 0.0, 0.0);
         for b in 0..k {
             let x = cw[b];
-            sum += x;
-            sum2 += x * x;
-            c2w += c[b] * c[b] * w[b];
-            wsum += w[b];
             cs += x * m.s[b];
             diag += x * x * m.g[b][b];
-            let row: f64 = (0..k).map(|j| cw[j] * m.g[b][j]).sum();
-            cgc += x * row;
+            cgc += x * gcw[b];
         }
+        let (sum, sum2) = (wt.sum, wt.sum2);
         let (p, q) = ((cgc - diag) / (sum * sum - sum2), cgc / (sum * sum));
         self.n += times * n;
         self.p += times * p;
         self.a += times * cs / sum;
         self.q += times * q;
-        self.v += times * (q - p) * sum * sum / (c2w * wsum);
+        self.v += times * (q - p) * sum * sum / (wt.c2w * wt.wsum);
     }
 
     /// The row's mean difference.
