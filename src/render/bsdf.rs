@@ -154,11 +154,24 @@ impl SceneRef<'_> {
                 Lobe::around(if from_below { -up } else { up }, ns, shading.rough.cov)
             })
             .flatten();
+        let policy = settings.wrong_side;
         if let Some(lobe) = &area_lobe {
             c.rough_hits += 1;
-            ns = lobe.world(lobe.sample_area(rng.f32(), rng.f32()), false);
+            let (u1, u2) = (rng.f32(), rng.f32());
+            // Under `terminate` a normal facing away ends both branches: drawn among the facing
+            // normals, the branches carry their share instead (the same expected value).
+            let facing =
+                (policy == WrongSide::Terminate).then(|| lobe.sample_area_facing(d, u1, u2));
+            ns = match facing {
+                None => lobe.world(lobe.sample_area(u1, u2), false),
+                Some(Some((m, share))) => {
+                    (s.g_reflected, s.g_refracted) = (share, share);
+                    lobe.world(m, false)
+                }
+                // no normal of the lobe faces the ray
+                Some(None) => d,
+            };
         }
-        let policy = settings.wrong_side;
         let mut dead = false;
         let mut modified = false;
         if d.dot(ns) >= 0.0 {

@@ -341,5 +341,7 @@ pub fn erf_inv(x: f32) -> f32 {
     p * x
 }
 
+mod facing;
+
 #[cfg(test)]
 mod tests;
