@@ -45,7 +45,9 @@ pub(super) struct Scatter {
     pub(super) reflected: Option<Vec3>,
     /// `None` on total internal reflection; `Some(None)` when the branch ended.
     pub(super) refracted: Option<Option<Vec3>>,
-    /// Smith's masking of the reflected and refracted directions (1 on a smooth hit).
+    /// Smith's masking of the reflected and refracted directions (the `smith` lobe), or the
+    /// share of the `mapped` lobe that faces the ray when its normal was drawn among those
+    /// (under `terminate`); 1 on a smooth hit.
     pub(super) g_reflected: f32,
     pub(super) g_refracted: f32,
     /// The footprint's width at the hit, m: where the rays leaving it start.
