@@ -80,12 +80,12 @@ pub fn normal_quantile(p: f64, refine: bool) -> f64 {
 impl Lobe {
     /// [`Lobe::sample_area`] among the normals that face `d` (world, pointing at the surface:
     /// d . m < 0 for the world normal m), from two uniform numbers, with the share of the lobe
-    /// they hold; `None` where no normal of the lobe faces it. Where nearly all of it does
-    /// (below, t < -4) it is the plain draw with a share of 1, which may face away. A normal faces d when its slopes
+    /// they hold; `None` where no normal of the lobe faces it. A normal faces d when its slopes
     /// (sx, sy) satisfy a sx + b sy > c, (a, b, c) being d in the lobe's frame: a half-plane,
     /// so along the unit direction e of (a alpha_x, b alpha_y) the standard normal variable z of
     /// the slopes must exceed a threshold t, and across it, w, is free. z is drawn from the
-    /// tail beyond t by inverting its distribution, w as in a plain draw.
+    /// tail beyond t by inverting its distribution, w as in a plain draw. Where nearly all of
+    /// the lobe faces d (t < -4) it is the plain draw with a share of 1, which may face away.
     pub fn sample_area_facing(&self, d: Vec3, u1: f32, u2: f32) -> Option<(Vec3, f32)> {
         let (a, b, c) = (
             f64::from(d.dot(self.x)),
