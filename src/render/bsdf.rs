@@ -170,7 +170,8 @@ impl SceneRef<'_> {
                     (s.g_reflected, s.g_refracted) = (share, share);
                     lobe.world(m, false)
                 }
-                // no normal of the lobe faces the ray
+                // no normal of the lobe faces the ray: the ray itself stands for one facing
+                // away, and the branches end below as theirs do
                 Some(None) => d,
             };
         }

@@ -486,6 +486,7 @@ impl Accel for Exact {
     fn exact_surface(&self) -> bool {
         true
     }
+
     fn exact_levels(&self) -> bool {
         self.surface.levels
     }

@@ -123,11 +123,12 @@ impl RowSums {
     /// ([`Weights::new`], once for every field of a block): `w` the films' batch weights (their
     /// sample counts, or equal), `c` the bootstrap's draw (at least two non-zero; all 1 for the
     /// point estimate). With those weights the pixel's mean is A = sum c_b w_b D_b / sum c_b w_b
-    /// and P = sum_{b != c} (c w)_b (c w)_c D_b D_c / sum_{b != c} (c w)_b (c w)_c: the batches are independent, so E[P] = mu^2 and
-    /// E[A^2 - P] = Var(A), whatever the weights. Var(A) is the noise of the replicate's
-    /// weighting, not of the film's: with batch means of variance s^2 / w_b it is
-    /// s^2 sum c^2 w / (sum c w)^2, so `v` gathers (A^2 - P) (sum c w)^2 / (sum c^2 w sum w),
-    /// the film's own noise variance s^2 / sum w however the batches were drawn.
+    /// and P = sum_{b != c} (c w)_b (c w)_c D_b D_c / sum_{b != c} (c w)_b (c w)_c: the batches
+    /// are independent, so E[P] = mu^2 and E[A^2 - P] = Var(A), whatever the weights. Var(A) is
+    /// the noise of the replicate's weighting, not of the film's: with batch means of variance
+    /// s^2 / w_b it is s^2 sum c^2 w / (sum c w)^2, so `v` gathers (A^2 - P) (sum c w)^2 /
+    /// (sum c^2 w sum w), the film's own noise variance s^2 / sum w however the batches were
+    /// drawn.
     pub fn add_weighted(&mut self, m: &Gram, n: f64, wt: &Weights, times: f64) {
         let (k, cw) = (wt.k, &wt.cw);
         // (G cw)_b, each summed over j in order as a row's sum would be (from -0.0, as `sum`
