@@ -298,13 +298,25 @@ fn bench_accuracy_writes_its_files_and_a_configuration_matches_itself() {
     assert!(csv.contains("paper-low,mapped,exact,8,"), "{csv}");
     assert!(csv.contains("paper-low,filtered,exact,8,"), "{csv}");
     // One ocean for every tessellation and the reference, its build counted in each point as
-    // a render of its own would count it.
+    // a render of its own would count it; so are filtered normals' levels, built once.
     assert_eq!(r.oceans_built, 1);
     let ocean = r.points[0].seconds_ocean;
     assert!(ocean > 0.0);
+    let levels = r.points[4].seconds_levels;
+    assert!(levels > 0.0, "{:?}", r.points[4]);
     for p in &r.points {
         assert_eq!(p.seconds_ocean, ocean, "{p:?}");
-        let own = p.seconds_ocean + p.seconds_tessellation + p.seconds_build + p.seconds_trace;
+        let filtered = p.normals == NormalMode::Filtered;
+        assert_eq!(
+            p.seconds_levels,
+            if filtered { levels } else { 0.0 },
+            "{p:?}"
+        );
+        let own = p.seconds_ocean
+            + p.seconds_tessellation
+            + p.seconds_build
+            + p.seconds_levels
+            + p.seconds_trace;
         assert!((p.seconds_total - own).abs() < 1e-9, "{p:?}");
     }
     // The mapped points are the reference's configuration with fewer samples: no bias to

@@ -195,10 +195,15 @@ pub struct Point {
     pub seconds_ocean: f64,
     pub seconds_tessellation: f64,
     pub seconds_build: f64,
+    /// Filtered normals' levels and slope tables: built once on the sweep's ocean and, like
+    /// the ocean, counted in every filtered point as a render of its own would build them (0
+    /// for the other normals).
+    pub seconds_levels: f64,
     pub seconds_trace: f64,
     /// Estimated share of the trace spent on normal mapping.
     pub seconds_normal_map: f64,
-    /// Ocean + tessellation + BVH + trace: what rendering this configuration alone costs.
+    /// Ocean + tessellation + BVH + levels + trace: what rendering this configuration alone
+    /// costs.
     pub seconds_total: f64,
     /// Bytes of the point's data: ocean layers, mesh, BVH, film.
     pub memory_bytes: u64,
@@ -500,6 +505,7 @@ mod tests {
             seconds_ocean: 0.0,
             seconds_tessellation: 0.0,
             seconds_build: 0.0,
+            seconds_levels: 0.0,
             seconds_trace: 0.0,
             seconds_normal_map: 0.0,
             seconds_total: spp as f64,

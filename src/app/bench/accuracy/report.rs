@@ -27,12 +27,12 @@ pub(super) fn write(
         use std::io::Write;
         writeln!(
             w,
-            "lod,normals,surface,spp,triangles,seconds_ocean,seconds_tessellation,seconds_build,seconds_trace,seconds_normal_map,seconds_total,memory_bytes,rays,error,error_lo,error_hi,bias,bias_lo,bias_hi,bias_resolved,error_plain,noise,rmse_relative,rmse_relative_lo,rmse_relative_hi,pareto"
+            "lod,normals,surface,spp,triangles,seconds_ocean,seconds_tessellation,seconds_build,seconds_levels,seconds_trace,seconds_normal_map,seconds_total,memory_bytes,rays,error,error_lo,error_hi,bias,bias_lo,bias_hi,bias_resolved,error_plain,noise,rmse_relative,rmse_relative_lo,rmse_relative_hi,pareto"
         )?;
         for p in &points {
             writeln!(
                 w,
-                "{},{},{},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{},{:.6},{:.6},{:.6},{:.6},{:.6},{}",
+                "{},{},{},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{},{:.6},{:.6},{:.6},{:.6},{:.6},{}",
                 p.lod,
                 p.normals,
                 p.surface,
@@ -41,6 +41,7 @@ pub(super) fn write(
                 p.seconds_ocean,
                 p.seconds_tessellation,
                 p.seconds_build,
+                p.seconds_levels,
                 p.seconds_trace,
                 p.seconds_normal_map,
                 p.seconds_total,

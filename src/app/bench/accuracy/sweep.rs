@@ -71,6 +71,13 @@ pub(super) fn render_points(
                 c.render.spp = spp;
                 let r = p.render_batches(&c, MAX_BATCHES, false)?;
                 let (film, rep) = (r.film, r.report);
+                // The levels are kept on the shared ocean: the first filtered render builds
+                // them, and every filtered point counts what that took.
+                let seconds_levels = if normals == NormalMode::Filtered {
+                    *first.seconds_levels.get_or_insert(rep.seconds_levels)
+                } else {
+                    0.0
+                };
                 let film_bytes = (film.image.pixels.len() * 12
                     + film.batches.as_ref().map_or(0, |b| b.luminance.len() * 4))
                     as u64;
@@ -85,9 +92,10 @@ pub(super) fn render_points(
                         seconds_ocean: first.seconds_ocean,
                         seconds_tessellation: rep.seconds_tessellation,
                         seconds_build: rep.seconds_build,
+                        seconds_levels,
                         seconds_trace: rep.seconds_trace,
                         seconds_normal_map: rep.seconds_normal_map,
-                        seconds_total: set_up + rep.seconds_trace,
+                        seconds_total: set_up + seconds_levels + rep.seconds_trace,
                         memory_bytes: structures + film_bytes,
                         rays: rep.rays,
                         error: f64::NAN,
@@ -122,6 +130,8 @@ pub(super) struct Shared {
     ocean: Arc<Surface>,
     sky: Arc<Sky>,
     pub seconds_ocean: f64,
+    /// What building filtered normals' levels and slope tables took, once one render has.
+    pub seconds_levels: Option<f64>,
     /// How many of the scenes prepared on these built an ocean of their own (1: the first).
     pub oceans_built: usize,
 }
@@ -132,6 +142,7 @@ impl Shared {
             ocean: Arc::clone(&p.ocean),
             sky: Arc::clone(&p.sky),
             seconds_ocean: p.seconds_ocean,
+            seconds_levels: None,
             oceans_built: 0,
         }
     }
