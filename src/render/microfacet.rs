@@ -46,7 +46,14 @@ impl Lobe {
         // world slope (the covariance is given for the flat sea; n is within a few degrees of
         // the vertical wherever a lobe is wide).
         let t1 = (Vec3::X - Vec3::X.dot(n) * n).normalize_or(Vec3::X);
-        let t2 = n.cross(t1).normalize_or(Vec3::Z);
+        // n and t1 are unit and orthogonal, so their cross product is unit (up to rounding)
+        // unless t1 fell back to x along n
+        let t2 = n.cross(t1);
+        let t2 = if t2.length_squared() > 0.5 {
+            t2
+        } else {
+            Vec3::Z
+        };
         // n x t1 is -z for n = +y (slopes along t2 are minus the z slopes) and +z for n = -y
         // (the water side, where both slopes change sign): the cross term follows t1.x t2.z.
         let b = b * (t1.x * t2.z);
