@@ -6,9 +6,10 @@
 //! cargo run --release --example seed_noise -- S1.exr S2.exr ... SN.exr [vs T1.exr ... TM.exr]
 //! ```
 //!
-//! Each file is a full-sphere equirectangular render (width = 2 x height) of the same scene,
-//! size and sample count with its own `--seed`. For every pixel below the horizon (the lower
-//! half of the rows) the variance of its luminance across the N renders is the variance of one
+//! Each file is a full-sphere equirectangular render (width = 2 x height), or a band of rows
+//! below the horizon (`render --band`), of the same scene, size and sample count with its own
+//! `--seed`. For every pixel below the horizon (the lower half of a sphere's rows, every row
+//! of a band) the variance of its luminance across the N renders is the variance of one
 //! render's pixel, whatever the sampling pattern; `Y.variance` is the samples' variance over
 //! their count, which takes the samples as independent and so over-states the variance of a
 //! mean over a stratified pattern. Printed: the RMS over the sea's pixels of both standard
@@ -70,13 +71,16 @@ fn measure(files: &[String]) -> [(f64, f64, f64); 3] {
         let v = vastocean::image_io::read_exr_channel(p, "Y.variance")
             .unwrap_or_else(|e| panic!("{f}: {e}"));
         let (w, h) = (img.width, img.height);
-        if *size.get_or_insert((w, h)) != (w, h) || w != 2 * h {
-            panic!(
-                "{f}: {w} x {h}: every render must be the same full sphere (width = 2 x height)"
-            );
+        if *size.get_or_insert((w, h)) != (w, h) {
+            panic!("{f}: {w} x {h}: every render must be the same size");
         }
-        // the sea: the lower half of the rows
-        let sea = h / 2 * w..h * w;
+        // the sea: the lower half of the rows of a full sphere, every row of a band (`render
+        // --band` below the horizon)
+        let sea = if w == 2 * h {
+            h / 2 * w..h * w
+        } else {
+            0..h * w
+        };
         lum.push(
             img.pixels[sea.clone()]
                 .iter()

@@ -43,6 +43,14 @@ fn assert_batches_match_single_rays(
                 })
                 .collect();
             let rng = |s: usize| Rng::keyed(&[3, key, s as u64]);
+            // the film's draws for the first rough hits, one batch's points
+            let strata = vastocean::render::strata::Strata::new(key);
+            let draws: Vec<[f32; 2]> = (0..n as u32)
+                .map(|j| {
+                    let [u1, u2, ..] = strata.point(j);
+                    [u1, u2]
+                })
+                .collect();
             let mut hits = vec![None; rays.len()];
             accel.intersect_many(&rays, &mut hits);
             let mut rngs: Vec<Rng> = (0..rays.len()).map(rng).collect();
@@ -52,6 +60,7 @@ fn assert_batches_match_single_rays(
             assert_eq!(predicted, scene.predict_camera_prim(&centre, &mut single));
             scene.radiance_camera_batch(
                 &rays,
+                Some(&draws),
                 predicted,
                 settings,
                 &mut rngs,
@@ -64,6 +73,7 @@ fn assert_batches_match_single_rays(
                 let one = std::slice::from_ref(ray);
                 scene.radiance_camera_batch(
                     one,
+                    Some(std::slice::from_ref(&draws[s])),
                     predicted,
                     settings,
                     &mut [rng(s)],
@@ -350,7 +360,15 @@ fn predicted_camera_hits_are_the_closest_hits() {
             let mut c = Counters::default();
             let mut l = [Vec3::ZERO];
             let mut rng = [vastocean::rng::Rng::keyed(&[1])];
-            scene.radiance_camera_batch(&[*ray], predicted, &settings, &mut rng, &mut c, &mut l);
+            scene.radiance_camera_batch(
+                &[*ray],
+                None,
+                predicted,
+                &settings,
+                &mut rng,
+                &mut c,
+                &mut l,
+            );
             (l[0], c)
         };
         let (traced, _) = alone(&shallow, None);

@@ -95,6 +95,9 @@ pub(super) struct HitShading {
     pub(super) lod: LevelSet,
     /// The path's segment (its depth) at this hit.
     pub(super) segment: u32,
+    /// The two numbers a rough hit draws its normal with, where the camera's sampler
+    /// stratified them (a camera ray's first hit); `None`: from the path's `rng`.
+    pub(super) draw: Option<[f32; 2]>,
 }
 
 impl SceneRef<'_> {
@@ -159,7 +162,7 @@ impl SceneRef<'_> {
         let policy = settings.wrong_side;
         if let Some(lobe) = &area_lobe {
             c.rough_hits += 1;
-            let (u1, u2) = (rng.f32(), rng.f32());
+            let [u1, u2] = shading.draw.unwrap_or_else(|| [rng.f32(), rng.f32()]);
             // Under `terminate` a normal facing away ends both branches: drawn among the facing
             // normals, the branches carry their share instead (the same expected value).
             let facing =
@@ -310,7 +313,8 @@ impl SceneRef<'_> {
         let policy = settings.wrong_side;
         c.rough_hits += 1;
         let (wo, _) = lobe.local(-d);
-        let m_local = lobe.sample_visible(wo, rng.f32(), rng.f32());
+        let [u1, u2] = shading.draw.unwrap_or_else(|| [rng.f32(), rng.f32()]);
+        let m_local = lobe.sample_visible(wo, u1, u2);
         let m = lobe.world(m_local, false);
         s.fresnel = fresnel(wo.dot(m_local), eta_i, eta_t);
         // Masking: a direction below the resolved surface has no weight.

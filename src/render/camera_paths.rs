@@ -74,15 +74,20 @@ impl SceneRef<'_> {
     }
 
     /// Radiance along camera rays (in the air, first segment), computed together: see
-    /// [`Self::radiance_batch`]. At most [`CAMERA_BATCH`] rays; `rngs[i]` is ray i's generator
+    /// [`Self::radiance_batch`]. At most [`CAMERA_BATCH`] rays; `draws[i]`, if given, the two
+    /// numbers ray i's first rough hit draws its normal with (the film's stratified pairs,
+    /// [`super::strata`]); `rngs[i]` is ray i's generator
     /// and `out[i]` receives its radiance. `predicted`: the pixel's triangle from
     /// [`Self::predict_camera_prim`]; a ray that descends more steeply than the mesh slopes and
     /// meets it takes that hit ([`hit_on_triangle`]) instead of the BVH's. Each ray's result is
-    /// bit for bit what it gets in a batch of one with the same prediction; with `None`, what
-    /// [`Self::radiance`] gives it (with a prediction, that up to the rounding of the hit).
+    /// bit for bit what it gets in a batch of one with the same prediction and draw; without
+    /// draws and with no prediction, what [`Self::radiance`] gives it (with a prediction, that
+    /// up to the rounding of the hit).
+    #[allow(clippy::too_many_arguments)]
     pub fn radiance_camera_batch(
         &self,
         rays: &[Ray],
+        draws: Option<&[[f32; 2]]>,
         predicted: Option<u32>,
         settings: &TraceSettings,
         rngs: &mut [Rng],
@@ -91,6 +96,7 @@ impl SceneRef<'_> {
     ) {
         let n = rays.len();
         assert!(n <= CAMERA_BATCH && rngs.len() == n && out.len() == n);
+        assert!(draws.is_none_or(|d| d.len() == n), "one draw per ray");
         let mut entries = [PathVertex::NONE; CAMERA_BATCH];
         for (i, ((e, ray), rng)) in entries
             .iter_mut()
@@ -98,7 +104,8 @@ impl SceneRef<'_> {
             .zip(rngs.iter_mut())
             .enumerate()
         {
-            *e = PathVertex::camera(*ray, i as u8, self.camera_lod(ray, settings, rng));
+            let draw = draws.map(|d| d[i]);
+            *e = PathVertex::camera(*ray, i as u8, self.camera_lod(ray, settings, rng), draw);
         }
         self.radiance_batch(&entries[..n], predicted, 0, settings, rngs, c, out);
     }

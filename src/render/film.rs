@@ -1,6 +1,7 @@
 //! The film: rows rendered in parallel, `spp` samples per pixel on a low-discrepancy pattern
-//! (the R2 sequence of Roberts 2018, rotated per pixel by a hashed offset: Cranley-Patterson;
-//! one sequence for the even samples and one for the odd ones), summed in f64 and averaged. Every random number is a hash of (seed, pixel, sample), so an
+//! (each batch of a pixel's samples, below, takes consecutive points of its own scrambled
+//! Sobol' sequence over the pixel and the first rough hit's draw: `super::strata`), summed in
+//! fixed point and averaged. Every random number is a hash of (seed, pixel, sample), so an
 //! image does not depend on the thread count (DESIGN.md, Determinism). A guard drops any
 //! sample that is NaN or infinite and counts it.
 //!
@@ -12,7 +13,7 @@
 //! - per pixel, the sample variance of the luminance (from exact fixed-point sums), from which the
 //!   variance of the pixel's mean follows (`var_y`, written to the EXR as `Y.variance`);
 //! - on request, batch means: the samples of each pixel dealt round-robin into `k` batches
-//!   (sample s into batch s mod k), each batch on its own rotated R2 sequence with its own
+//!   (sample s into batch s mod k), each batch on its own scrambled sequence with its own
 //!   random streams, and the mean luminance of each. The batches are `k` independent renders of
 //!   the same scene, and they measure the noise of anything computed from images that share
 //!   sample seeds: the difference of two scenarios rendered with the same seed is correlated
@@ -26,13 +27,11 @@ use rayon::prelude::*;
 use super::camera::Camera;
 use super::integrator::{CAMERA_BATCH, Counters, SceneRef, TraceSettings};
 pub use super::pixel_state::PixelState;
+use super::strata::Strata;
 use crate::accel::Ray;
 use crate::color::luminance;
 use crate::image_io::RgbImage;
 use crate::rng::Rng;
-
-/// R2 generator constants: 1/phi2 and 1/phi2^2 for the plastic number phi2.
-const R2: (f64, f64) = (0.754_877_666_246_692_7, 0.569_840_290_998_053_3);
 
 /// Most batches a film keeps per pixel.
 pub const MAX_BATCHES: usize = 8;
@@ -324,13 +323,12 @@ pub fn render_image_samples(
                         // no sample of this pixel in this pass (a boost of 0 leaves it out)
                         return acc;
                     }
-                    // Each sequence runs its own rotated R2 pattern, so batches are independent
+                    // Each batch runs its own scrambled sequence, so batches are independent
                     // renders (their noise estimate is unbiased).
                     // (the keys [seed, pixel] every stream of the pixel starts with, hashed once)
                     let keys = Rng::keyed(&[seed, pixel]);
-                    let offsets: [(f64, f64); MAX_BATCHES] = std::array::from_fn(|b| {
-                        let mut rot = keys.then(u64::MAX - b as u64);
-                        (rot.f64(), rot.f64())
+                    let strata: [Strata; MAX_BATCHES] = std::array::from_fn(|b| {
+                        Strata::new(keys.then(u64::MAX - b as u64).next_u64())
                     });
                     // The triangle the pixel's centre ray hits, which its camera rays take
                     // without the BVH where they can (see `SceneRef::predict_camera_prim`).
@@ -353,13 +351,14 @@ pub fn render_image_samples(
                         }
                         let chunk = &ids[..n];
                         let mut rays = [Ray::new(origin, [0.0, 1.0, 0.0]); CAMERA_BATCH];
+                        let mut draws = [[0.0f32; 2]; CAMERA_BATCH];
                         let mut rngs: [Rng; CAMERA_BATCH] =
                             std::array::from_fn(|_| Rng::keyed(&[]));
-                        for ((&s, ray), rng) in chunk.iter().zip(&mut rays).zip(&mut rngs) {
-                            let b = s as usize % k;
-                            let ((ox, oy), j) = (offsets[b], (s as usize / k) as f64);
-                            let jx = (ox + j * R2.0).fract() as f32;
-                            let jy = (oy + j * R2.1).fract() as f32;
+                        for (((&s, ray), rng), draw) in
+                            chunk.iter().zip(&mut rays).zip(&mut rngs).zip(&mut draws)
+                        {
+                            let [u1, u2, jx, jy] = strata[s as usize % k].point(s / k as u32);
+                            *draw = [u1, u2];
                             let dir = pixel_rays.direction(jx, jy);
                             *ray = Ray::new(origin, dir.to_array());
                             *rng = keys.then(s as u64);
@@ -367,6 +366,7 @@ pub fn render_image_samples(
                         let mut ls = [Vec3::ZERO; CAMERA_BATCH];
                         scene.radiance_camera_batch(
                             &rays[..n],
+                            Some(&draws[..n]),
                             predicted,
                             settings,
                             &mut rngs[..n],

@@ -177,6 +177,7 @@ impl SceneRef<'_> {
             width_m: 0.0,
             lod: ALL_WAVES,
             sun_pdf: 0.0,
+            draw: None,
         };
         let mut out = [Vec3::ZERO];
         self.radiance_batch(
@@ -379,6 +380,7 @@ impl SceneRef<'_> {
                         width_m: widths[i],
                         lod: e.lod,
                         segment,
+                        draw: e.draw,
                     };
                     let rng = &mut rngs[e.sample as usize];
                     shaded_k.push(k);
@@ -465,6 +467,7 @@ impl SceneRef<'_> {
                     width_m: o.width_m,
                     lod: entries[*k as usize].lod,
                     sun_pdf: bounce.sun_pdf,
+                    draw: None,
                 };
                 of[b] = (n_shaded + jo) as u8;
                 b += 1;
@@ -480,6 +483,7 @@ impl SceneRef<'_> {
                         width_m: s.width_m,
                         lod: entries[*k as usize].lod,
                         sun_pdf,
+                        draw: None,
                     };
                     of[b] = j as u8;
                     b += 1;
@@ -536,15 +540,25 @@ pub(super) struct PathVertex {
     /// The density with which a rough hit that sampled the sun chose this ray's direction: the
     /// sun the ray sees directly is weighed against the sun's own samples (0: full weight).
     pub(super) sun_pdf: f32,
+    /// A camera ray's stratified pair for the draw of its first rough hit's normal
+    /// ([`super::strata`]); `None`: the path's own numbers.
+    draw: Option<[f32; 2]>,
 }
 
 impl PathVertex {
-    /// Sample `sample`'s camera ray, whose path meets the surface `lod`.
-    pub(super) fn camera(ray: Ray, sample: u8, lod: LevelSet) -> PathVertex {
+    /// Sample `sample`'s camera ray, whose path meets the surface `lod`, and whose first rough
+    /// hit draws its normal from `draw` (if given).
+    pub(super) fn camera(
+        ray: Ray,
+        sample: u8,
+        lod: LevelSet,
+        draw: Option<[f32; 2]>,
+    ) -> PathVertex {
         PathVertex {
             ray,
             sample,
             lod,
+            draw,
             ..PathVertex::NONE
         }
     }
@@ -563,5 +577,6 @@ impl PathVertex {
         width_m: 0.0,
         lod: ALL_WAVES,
         sun_pdf: 0.0,
+        draw: None,
     };
 }

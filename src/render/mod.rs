@@ -23,6 +23,7 @@ pub mod pixel_state;
 pub mod report;
 pub mod shortcuts;
 mod slots;
+pub mod strata;
 pub mod water;
 
 pub use crate::config::{NormalMode, Projection, Water};
