@@ -161,7 +161,7 @@ pub fn frontier(
         chart
             .configure_mesh()
             .x_label_formatter(&log_label)
-            .x_desc("run time, seconds (ocean + tessellation + BVH + trace; log scale)")
+            .x_desc("run time, seconds (ocean + tessellation + BVH + filtered normals' levels + trace; log scale)")
             .y_desc(y_desc)
             .label_style(("sans-serif", 15))
             .axis_desc_style(("sans-serif", 16))
