@@ -141,7 +141,7 @@ fn glint_hint(sea_relative: f64, normals: crate::config::NormalMode) -> &'static
     use crate::config::NormalMode;
     if sea_relative > 1.0 && normals == NormalMode::Mapped {
         "; --normals filtered integrates the waves below each pixel instead of finding their \
-         glints by chance (on the default scene an eighth of the noise for 1.8x the trace; \
+         glints by chance (on the default scene a ninth of the noise for 1.8x the trace; \
          docs/filtered.md)"
     } else {
         ""
