@@ -28,6 +28,23 @@ pub struct Strata {
 /// 1, 3, 1.
 const THIRD: [u32; 32] = directions(2, 1, [1, 3, 0]);
 const FOURTH: [u32; 32] = directions(3, 1, [1, 3, 1]);
+/// The second dimension's: the rows of Pascal's triangle modulo 2 (polynomial x + 1).
+const SECOND: [u32; 32] = directions(1, 0, [1, 0, 0]);
+
+/// Each point is built with its bits reversed, where the scramble works (see
+/// [`owen_scramble_reversed`]): the direction numbers of the second to fourth dimensions
+/// reversed (the first dimension's reversed point is the index itself).
+const REVERSED: [[u32; 32]; 3] = [reversed(SECOND), reversed(THIRD), reversed(FOURTH)];
+
+const fn reversed(v: [u32; 32]) -> [u32; 32] {
+    let mut r = [0u32; 32];
+    let mut k = 0;
+    while k < 32 {
+        r[k] = v[k].reverse_bits();
+        k += 1;
+    }
+    r
+}
 
 /// The 32 direction numbers of a Sobol' dimension from its polynomial's degree `s`, its inner
 /// coefficients `a` (s - 1 bits, the highest first) and its `s` initial numbers `m`.
@@ -89,42 +106,28 @@ impl Strata {
     /// keeps the direction numbers' loops short; a shuffled 32-bit one made this 30 % of a
     /// render.)
     pub fn point(&self, index: u32) -> [f32; 4] {
-        let i = index;
-        let raw = [
-            i.reverse_bits(),
-            sobol_second(i),
-            sobol(&THIRD, i),
-            sobol(&FOURTH, i),
+        let rev = [
+            index,
+            sobol(&REVERSED[0], index),
+            sobol(&REVERSED[1], index),
+            sobol(&REVERSED[2], index),
         ];
-        std::array::from_fn(|d| unit(owen_scramble(raw[d], self.dims[d])))
+        std::array::from_fn(|d| unit(owen_scramble_reversed(rev[d], self.dims[d]).reverse_bits()))
     }
 }
 
-/// The second dimension of Sobol's sequence (the first is the index's bits reversed): its
-/// direction numbers are the rows of Pascal's triangle modulo 2 (Kollig & Keller 2002).
-fn sobol_second(mut i: u32) -> u32 {
-    let (mut r, mut v) = (0u32, 1u32 << 31);
-    while i != 0 {
-        if i & 1 != 0 {
-            r ^= v;
-        }
-        i >>= 1;
-        v ^= v >> 1;
-    }
-    r
-}
-
-/// A nested uniform (Owen) scramble of the bits of `v`, most significant first: each bit is
-/// flipped or not by a hash of the bits above it (pbrt-v4's `FastOwenScrambler`, on the
-/// reversed bits, where a multiply carries from lower bits to higher ones only).
-fn owen_scramble(v: u32, seed: u32) -> u32 {
-    let mut v = v.reverse_bits();
+/// A nested uniform (Owen) scramble of the bits of a number, most significant first (each
+/// bit flipped or not by a hash of the bits above it), done on its bits reversed `v`, where a
+/// multiply carries from the lower bits to the higher ones only: pbrt-v4's
+/// `FastOwenScrambler` without its two reversals. Returns the scrambled number's bits
+/// reversed.
+fn owen_scramble_reversed(mut v: u32, seed: u32) -> u32 {
     v ^= v.wrapping_mul(0x3d20_adea);
     v = v.wrapping_add(seed);
     v = v.wrapping_mul((seed >> 16) | 1);
     v ^= v.wrapping_mul(0x0552_6c56);
     v ^= v.wrapping_mul(0x53a2_2864);
-    v.reverse_bits()
+    v
 }
 
 /// The top 24 bits as a number in [0, 1).
@@ -177,13 +180,15 @@ mod tests {
         }
     }
 
-    /// The third and fourth dimensions are Sobol's: its first eight points in index order
+    /// The second to fourth dimensions are Sobol's: its first eight points in index order
     /// (what a Gray-code generator, as SciPy's, lists as its points 0, 1, 3, 2, 7, 6, 4, 5).
     #[test]
     fn direction_numbers_give_sobols_points() {
         let unit = |v: u32| v as f64 / 2f64.powi(32);
+        let second: Vec<f64> = (0..8).map(|i| unit(sobol(&SECOND, i))).collect();
         let third: Vec<f64> = (0..8).map(|i| unit(sobol(&THIRD, i))).collect();
         let fourth: Vec<f64> = (0..8).map(|i| unit(sobol(&FOURTH, i))).collect();
+        assert_eq!(second, [0.0, 0.5, 0.75, 0.25, 0.625, 0.125, 0.375, 0.875]);
         assert_eq!(third, [0.0, 0.5, 0.75, 0.25, 0.375, 0.875, 0.625, 0.125]);
         assert_eq!(fourth, [0.0, 0.5, 0.75, 0.25, 0.125, 0.625, 0.875, 0.375]);
     }
