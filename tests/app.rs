@@ -236,8 +236,53 @@ fn tiny_compare_runs_end_to_end_and_writes_every_file() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
+/// A configuration against a reference of itself (more samples, its own seeds) has no bias,
+/// and its error, noise included, is its noise. Both are 95 % statements of the estimator's
+/// intervals, so one render in twenty may miss them by chance: over six sample seeds, two
+/// sample counts each, at most three of the twelve may resolve a bias or leave their noise
+/// outside their error's interval (four or more by chance: under 0.5 % at a 1-in-20 rate); a
+/// real difference, resolved more often than not, passes with a probability under 8 %.
+/// Measured over ten seeds: 1 of 20 (the 32 spp render of seed 1, both at once). At 32 spp a
+/// batch holds four samples on a low-discrepancy pattern, where a noise taken from the
+/// samples' variance, as if they were independent, would overstate it.
 #[test]
-fn bench_accuracy_writes_its_files_and_a_configuration_matches_itself() {
+fn bench_accuracy_resolves_no_bias_of_a_configuration_against_itself() {
+    use app::bench::accuracy::{AccuracyJob, Tessellation};
+    use vastocean::config::LodChoice;
+    let mut missed = Vec::new();
+    for seed in 1..=6u64 {
+        let mut scene = AccuracyJob::default_scene();
+        scene.render.threads = 2;
+        scene.render.seed = seed;
+        scene.render.wrong_side = vastocean::config::WrongSide::Mirror;
+        let job = AccuracyJob {
+            scene,
+            width: 64,
+            tessellations: vec![Tessellation::preset(LodChoice::PaperLow)],
+            spp: vec![8, 32],
+            normals: vec![NormalMode::Mapped],
+            reference: Tessellation::preset(LodChoice::PaperLow),
+            reference_spp: 32,
+            reference_spp_max: 512,
+            reference_max_boost: 4,
+            exact: None,
+            out: tmp(&format!("bench-accuracy-self-{seed}")),
+            progress: false,
+        };
+        let r = app::bench::accuracy::run(&job).unwrap();
+        for p in &r.points {
+            assert_eq!(p.bias_resolved, p.bias_ci[0] > 0.0, "{p:?}");
+            let noise_inside = p.error_ci[0] <= p.noise && p.noise <= p.error_ci[1];
+            if p.bias_resolved || !noise_inside {
+                missed.push((seed, p.spp, p.bias, p.bias_ci, p.noise, p.error_ci));
+            }
+        }
+    }
+    assert!(missed.len() <= 3, "{missed:?}");
+}
+
+#[test]
+fn bench_accuracy_writes_its_files_and_counts_each_points_set_up() {
     use app::bench::accuracy::{AccuracyJob, ExactSweep, Tessellation};
     use vastocean::config::{LodChoice, SurfaceKind};
     let dir = tmp("bench-accuracy");
@@ -319,17 +364,9 @@ fn bench_accuracy_writes_its_files_and_a_configuration_matches_itself() {
             + p.seconds_trace;
         assert!((p.seconds_total - own).abs() < 1e-9, "{p:?}");
     }
-    // The mapped points are the reference's configuration with fewer samples: no bias to
-    // resolve, and their error, noise included, is their noise (at 32 spp, four samples a
-    // batch on a low-discrepancy pattern: a noise taken from the samples' variance, as if they
-    // were independent, would overstate it).
-    for same in &r.points[..2] {
-        assert!(!same.bias_resolved && same.bias_ci[0] == 0.0, "{same:?}");
-        assert!(
-            same.error_ci[0] <= same.noise && same.noise <= same.error_ci[1],
-            "{same:?}"
-        );
-    }
+    // (That the mapped points, the reference's configuration with fewer samples, match it is
+    // a 95 % statement: tested across seeds in
+    // `bench_accuracy_resolves_no_bias_of_a_configuration_against_itself`.)
     // The reported share is the reference's noise over the smallest error in the table.
     let rf = &r.reference;
     let smallest = r
