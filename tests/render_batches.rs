@@ -15,7 +15,9 @@ use crate::render::{equirect, mean_abs_luminance_difference, ocean_grid, scene_r
 /// with the triangle its centre ray predicts) and one by one (a batch of one each, with the same
 /// prediction): hit for hit, radiance bit for bit, count for count. A sample's result must not
 /// depend on what else its batch holds, or a render split into passes would not merge into the
-/// single render. Returns the counts and the number of pixels.
+/// single render. (A batch whose rays all rise from above the highest vertex takes the sky
+/// without the batch's stages; [`SceneRef::radiance`] never does.) Returns the counts and the
+/// number of pixels.
 fn assert_batches_match_single_rays(
     scene: &SceneRef,
     settings: &TraceSettings,

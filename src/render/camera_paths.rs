@@ -73,6 +73,24 @@ impl SceneRef<'_> {
         slopes.drawn_levels(sigma, rng.f32())
     }
 
+    /// Whether every camera ray of a batch sees the sky and nothing else, as
+    /// [`Self::radiance_batch`] would answer it: it rises from above the highest vertex
+    /// (`skip_above_y`), no object can be in its way, and the path may take a segment. The sun
+    /// it meets counts whole (a camera ray carries no sun density), and the random numbers its
+    /// path would have drawn (the exact surface's levels) are drawn by no one else.
+    fn sees_only_sky(&self, rays: &[Ray], settings: &TraceSettings) -> bool {
+        let Some(top) = self.skip_above_y else {
+            return false;
+        };
+        settings.max_segments > 0
+            && rays
+                .iter()
+                .all(|r| r.dir[1] >= 0.0 && r.org[1] > top && r.is_finite())
+            && self
+                .objects
+                .is_none_or(|o| !rays.iter().any(|r| o.may_hit(r)))
+    }
+
     /// Radiance along camera rays (in the air, first segment), computed together: see
     /// [`Self::radiance_batch`]. At most [`CAMERA_BATCH`] rays; `draws[i]`, if given, the two
     /// numbers ray i's first rough hit draws its normal with (the film's stratified pairs,
@@ -97,6 +115,17 @@ impl SceneRef<'_> {
         let n = rays.len();
         assert!(n <= CAMERA_BATCH && rngs.len() == n && out.len() == n);
         assert!(draws.is_none_or(|d| d.len() == n), "one draw per ray");
+        if self.sees_only_sky(rays, settings) {
+            // What the batch's stages would find for each ray, without them: a quarter of a
+            // panorama's camera rays are these.
+            c.skipped_above += n as u64;
+            let (mut orgs, mut dirs) = ([Vec3::ZERO; CAMERA_BATCH], [Vec3::ZERO; CAMERA_BATCH]);
+            for ((o, d), ray) in orgs.iter_mut().zip(&mut dirs).zip(rays) {
+                (*o, *d) = (ray.org.into(), ray.dir.into());
+            }
+            self.sky.radiance_many(&orgs[..n], &dirs[..n], out);
+            return;
+        }
         let mut entries = [PathVertex::NONE; CAMERA_BATCH];
         for (i, ((e, ray), rng)) in entries
             .iter_mut()
