@@ -116,8 +116,8 @@ impl SceneRef<'_> {
         assert!(n <= CAMERA_BATCH && rngs.len() == n && out.len() == n);
         assert!(draws.is_none_or(|d| d.len() == n), "one draw per ray");
         if self.sees_only_sky(rays, settings) {
-            // What the batch's stages would find for each ray, without them: a quarter of a
-            // panorama's camera rays are these.
+            // What the batch's stages would find for each ray, without them: a panorama's
+            // upper half is all such batches.
             c.skipped_above += n as u64;
             let (mut orgs, mut dirs) = ([Vec3::ZERO; CAMERA_BATCH], [Vec3::ZERO; CAMERA_BATCH]);
             for ((o, d), ray) in orgs.iter_mut().zip(&mut dirs).zip(rays) {
