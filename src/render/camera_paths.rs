@@ -74,18 +74,14 @@ impl SceneRef<'_> {
     }
 
     /// Whether every camera ray of a batch sees the sky and nothing else, as
-    /// [`Self::radiance_batch`] would answer it: it rises from above the highest vertex
-    /// (`skip_above_y`), no object can be in its way, and the path may take a segment. The sun
-    /// it meets counts whole (a camera ray carries no sun density), and the random numbers its
-    /// path would have drawn (the exact surface's levels) are drawn by no one else.
+    /// [`Self::radiance_batch`] would answer it: it rises above the sea
+    /// ([`Self::rises_above_the_sea`], the test `answer_untraced` makes), no object can be in
+    /// its way, and the path may take a segment. The sun it meets counts whole (a camera ray
+    /// carries no sun density), and the random numbers its path would have drawn (the exact
+    /// surface's levels) are drawn by no one else.
     fn sees_only_sky(&self, rays: &[Ray], settings: &TraceSettings) -> bool {
-        let Some(top) = self.skip_above_y else {
-            return false;
-        };
         settings.max_segments > 0
-            && rays
-                .iter()
-                .all(|r| r.dir[1] >= 0.0 && r.org[1] > top && r.is_finite())
+            && rays.iter().all(|r| self.rises_above_the_sea(r))
             && self
                 .objects
                 .is_none_or(|o| !rays.iter().any(|r| o.may_hit(r)))

@@ -77,6 +77,16 @@ pub fn hit_on_triangle(ray: &Ray, tri: [Vec3; 3], prim: u32) -> Option<Hit> {
 }
 
 impl SceneRef<'_> {
+    /// Whether a ray in the air leaves upwards from above the highest vertex (`skip_above_y`),
+    /// where nothing of the sea lies ahead of it. (A ray with a NaN or infinite component is
+    /// left to the backend, which counts it.)
+    #[inline]
+    pub(super) fn rises_above_the_sea(&self, ray: &Ray) -> bool {
+        ray.dir[1] >= 0.0
+            && self.skip_above_y.is_some_and(|top| ray.org[1] > top)
+            && ray.is_finite()
+    }
+
     /// Whether a ray is answered without the BVH: cut at `max_segments`, or known to miss the
     /// surface (the skip shortcuts), which is counted, as is a ray that must be traced.
     /// `spawned`: the ray leaves a hit (on the side of the triangle it travels in).
@@ -98,13 +108,7 @@ impl SceneRef<'_> {
             c.skipped += 1;
             return Untraced::Known(Vec3::from(settings.upwelling));
         }
-        // (A ray with a NaN or infinite component is left to the backend, which counts it.)
-        if !in_water
-            && d.y >= 0.0
-            && let Some(top) = self.skip_above_y
-            && ray.org[1] > top
-            && ray.is_finite()
-        {
+        if !in_water && self.rises_above_the_sea(ray) {
             c.skipped_above += 1;
             return Untraced::Sky;
         }
