@@ -9,6 +9,14 @@ DEB_PKGS   := libembree-dev libclang-dev pkg-config gcc fonts-dejavu-core parall
 SUDO       := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 OUT        ?= out
 
+# The repository builds for x86-64-v3 (.cargo/config.toml); a processor without its
+# instructions gets a baseline x86-64 build (slower, the same images) instead of binaries and
+# build scripts that die on an illegal instruction.
+V3_FLAGS   := avx2 fma bmi1 bmi2 f16c movbe abm xsave
+ifneq ($(words $(V3_FLAGS)),$(words $(sort $(filter $(V3_FLAGS),$(shell grep -m1 '^flags' /proc/cpuinfo 2>/dev/null)))))
+export RUSTFLAGS ?= -C target-cpu=x86-64
+endif
+
 .PHONY: setup build run test test-full bench bench-report study lint man embree4-check embree4-test debian13-test clean
 
 # Installs only the packages that are missing; apt-get update runs only when something is.
