@@ -13,8 +13,10 @@ OUT        ?= out
 # instructions gets a baseline x86-64 build (slower, the same images) instead of binaries and
 # build scripts that die on an illegal instruction.
 V3_FLAGS   := avx2 fma bmi1 bmi2 f16c movbe abm xsave
+ifeq ($(shell uname -m),x86_64)
 ifneq ($(words $(V3_FLAGS)),$(words $(sort $(filter $(V3_FLAGS),$(shell grep -m1 '^flags' /proc/cpuinfo 2>/dev/null)))))
 export RUSTFLAGS ?= -C target-cpu=x86-64
+endif
 endif
 
 .PHONY: setup build run test test-full bench bench-report study lint man embree4-check embree4-test debian13-test clean
