@@ -25,27 +25,47 @@ const SERIES_MAX_RAD: f64 = 0.1;
 #[inline]
 pub(crate) fn sin_versine(theta: f64) -> (f64, f64) {
     if theta.abs() < SERIES_MAX_RAD {
-        let t = theta * theta;
-        let sin = theta * (1.0 - t / 6.0 * (1.0 - t / 20.0 * (1.0 - t / 42.0 * (1.0 - t / 72.0))));
-        let vers =
-            0.5 * t * (1.0 - t / 12.0 * (1.0 - t / 30.0 * (1.0 - t / 56.0 * (1.0 - t / 90.0))));
-        (sin, vers)
+        sin_versine_series(theta)
     } else {
-        let half = (0.5 * theta).sin();
-        (theta.sin(), 2.0 * half * half)
+        sin_versine_libm(theta)
     }
 }
 
+/// [`sin_versine`]'s series, whatever the angle.
+#[inline]
+fn sin_versine_series(theta: f64) -> (f64, f64) {
+    let t = theta * theta;
+    let sin = theta * (1.0 - t / 6.0 * (1.0 - t / 20.0 * (1.0 - t / 42.0 * (1.0 - t / 72.0))));
+    let vers = 0.5 * t * (1.0 - t / 12.0 * (1.0 - t / 30.0 * (1.0 - t / 56.0 * (1.0 - t / 90.0))));
+    (sin, vers)
+}
+
+/// [`sin_versine`] past the series' reach, out of line: where a loop inlined both branches,
+/// the compiler evaluated both for every element and selected (see [`curved_frame_point_near`]).
+#[cold]
+#[inline(never)]
+fn sin_versine_libm(theta: f64) -> (f64, f64) {
+    let half = (0.5 * theta).sin();
+    (theta.sin(), 2.0 * half * half)
+}
+
 /// atan(u) / u as a function of w = u^2 >= 0: the series 1 - w/3 + w^2/5 - ... to w^5 below
-/// w = 1e-3 (u < 0.032 rad, 200 km on the earth; truncation under 1e-19), libm above.
+/// w = 1e-3 (u < 0.032 rad, 200 km on the earth; truncation under 1e-19), libm above (out of
+/// line, as in [`sin_versine`]).
 #[inline]
 pub(crate) fn atan_over_arg(w: f64) -> f64 {
     if w < 1e-3 {
         1.0 - w * (1.0 / 3.0 - w * (1.0 / 5.0 - w * (1.0 / 7.0 - w * (1.0 / 9.0 - w / 11.0))))
     } else {
-        let u = w.sqrt();
-        u.atan() / u
+        atan_over_arg_libm(w)
     }
+}
+
+#[cold]
+#[inline(never)]
+fn atan_over_arg_libm(w: f64) -> f64 {
+    let u = w.sqrt();
+    u.atan() / u
 }
 
 /// The curved frame at nominal position (x, z): the sphere point at angle r / R about the
@@ -62,6 +82,18 @@ struct Frame {
 impl Frame {
     #[inline]
     fn at(x: f64, z: f64, earth_radius_m: f64) -> Frame {
+        Frame::with(x, z, earth_radius_m, sin_versine).0
+    }
+
+    /// The frame from `sin_versine` of the angle about the nadir, and whether that angle is
+    /// within the series' reach (false for NaN).
+    #[inline(always)]
+    fn with(
+        x: f64,
+        z: f64,
+        earth_radius_m: f64,
+        sin_versine: impl Fn(f64) -> (f64, f64),
+    ) -> (Frame, bool) {
         // (no overflow to guard against at sea-scale distances: sqrt, not hypot)
         let r = (x * x + z * z).sqrt();
         let (ux, uz) = if r > 0.0 { (x / r, z / r) } else { (1.0, 0.0) };
@@ -69,14 +101,15 @@ impl Frame {
         let (st, vers) = sin_versine(theta);
         let ct = 1.0 - vers;
         let drop = earth_radius_m * vers;
-        Frame {
+        let frame = Frame {
             ux,
             uz,
             base: [earth_radius_m * st * ux, -drop, earth_radius_m * st * uz],
             tr: [ct * ux, -st, ct * uz],
             ta: [-uz, 0.0, ux],
             up: [st * ux, ct, st * uz],
-        }
+        };
+        (frame, theta.abs() < SERIES_MAX_RAD)
     }
 
     /// A flat-frame vector (x, y, z) in the local axes.
@@ -99,7 +132,29 @@ pub fn curved_frame_point(
     sample: &Sample,
     earth_radius_m: f64,
 ) -> ([f64; 3], [f64; 3]) {
-    let f = Frame::at(x, z, earth_radius_m);
+    point_in(&Frame::at(x, z, earth_radius_m), sample)
+}
+
+/// [`curved_frame_point`] with the series whatever the angle, and whether the angle is within
+/// the series' reach: where it is, the point and normal are [`curved_frame_point`]'s bit for
+/// bit; where not (past 637 km on the earth, or NaN), the caller takes [`curved_frame_point`].
+/// Without a library call, a loop over many points compiles to vector code: the
+/// tessellation's, whose inlined [`sin_versine`] the compiler had vectorised by evaluating
+/// both of its branches for every vertex, two libm `sin` calls each.
+#[inline]
+pub(crate) fn curved_frame_point_near(
+    x: f64,
+    z: f64,
+    sample: &Sample,
+    earth_radius_m: f64,
+) -> ([f64; 3], [f64; 3], bool) {
+    let (f, near) = Frame::with(x, z, earth_radius_m, sin_versine_series);
+    let (p, n) = point_in(&f, sample);
+    (p, n, near)
+}
+
+#[inline]
+fn point_in(f: &Frame, sample: &Sample) -> ([f64; 3], [f64; 3]) {
     let d = f.tilt([
         sample.disp[0] as f64,
         sample.height as f64,
@@ -150,6 +205,37 @@ mod tests {
         // a few ulps: each side rounds on its own
         for (w, name) in worst.iter().zip(["sin", "versine", "atan(u)/u"]) {
             assert!(*w < 4.0 * f64::EPSILON, "{name}: {w:e}");
+        }
+    }
+
+    #[test]
+    fn the_series_frame_is_the_frame_within_its_reach() {
+        let sample = Sample {
+            height: 0.3,
+            disp: [0.1, -0.2],
+            normal: [0.1, 0.99, -0.05],
+            ..Sample::FLAT
+        };
+        let r_e = 1000.0;
+        // within the reach (100 m here), on both sides of its end, past it, and NaN
+        for (x, z) in [
+            (0.0, 0.0),
+            (3.0, -4.0),
+            (70.0, 70.0),
+            (70.0, 72.0),
+            (300.0, 1.0),
+        ]
+        .into_iter()
+        .chain([(f64::NAN, 1.0)])
+        {
+            let (p, n, near) = curved_frame_point_near(x, z, &sample, r_e);
+            let theta = x.hypot(z) / r_e;
+            assert_eq!(near, theta < SERIES_MAX_RAD, "({x}, {z})");
+            if near {
+                let bits = |v: [f64; 3]| v.map(f64::to_bits);
+                let (pw, nw) = curved_frame_point(x, z, &sample, r_e);
+                assert_eq!((bits(p), bits(n)), (bits(pw), bits(nw)), "({x}, {z})");
+            }
         }
     }
 

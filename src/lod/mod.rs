@@ -55,6 +55,7 @@ use crate::ocean::{Sample, Sampler};
 pub use crate::config::lod::{Pattern, Reading};
 
 pub(crate) use earth::atan_over_arg;
+use earth::curved_frame_point_near;
 pub use earth::{curved_frame_point, curved_frame_position, horizon_distance};
 
 /// Default earth radius, m (mean radius).
@@ -382,10 +383,21 @@ pub(crate) fn displace_into(
     {
         let samples = &mut samples[..uv.len()];
         sampler.samples(uv, samples);
-        for (((&[u, w], s), p), n) in uv.iter().zip(&*samples).zip(pos).zip(nrm) {
-            let (pp, nn) = curved_frame_point(u as f64, w as f64, s, earth_radius_m);
+        // the series for every vertex (vector code), then libm's functions for any past its
+        // reach, which a sea's vertices never are on the earth
+        let mut far = false;
+        for (((&[u, w], s), p), n) in uv.iter().zip(&*samples).zip(&mut *pos).zip(&mut *nrm) {
+            let (pp, nn, near) = curved_frame_point_near(u as f64, w as f64, s, earth_radius_m);
             *p = pp.map(|c| c as f32);
             *n = nn.map(|c| c as f32);
+            far |= !near;
+        }
+        if far {
+            for (((&[u, w], s), p), n) in uv.iter().zip(&*samples).zip(pos).zip(nrm) {
+                let (pp, nn) = curved_frame_point(u as f64, w as f64, s, earth_radius_m);
+                *p = pp.map(|c| c as f32);
+                *n = nn.map(|c| c as f32);
+            }
         }
     }
 }

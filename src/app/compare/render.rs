@@ -55,7 +55,6 @@ pub(super) fn render_scenarios(job: &CompareJob) -> Result<Renders, AppError> {
             eprintln!("compare: {what}");
         }
     };
-    let t = Instant::now();
     // The low tessellation first (its pilots need it), kept while the high one is traced.
     let (high_cfg, low_cfg) = (
         with_lod(&job.scene, &job.high),
@@ -92,6 +91,8 @@ pub(super) fn render_scenarios(job: &CompareJob) -> Result<Renders, AppError> {
             .map(|(r, _)| r.film)
     };
     let boosting = job.max_boost > 1;
+    // the pilots' own time: their traces and the boost map, not the sea or the meshes
+    let t = Instant::now();
     if boosting {
         for sc in [Scenario::LowMapped, Scenario::LowUnmapped] {
             pilots.push(pilot(&low, &low_cfg, sc)?);

@@ -136,7 +136,7 @@ impl fmt::Display for CompareSummary {
         if sa.max_boost > 1 {
             writeln!(
                 f,
-                "  samples: {} of {} analysed pixels boosted (up to {}x, after a {} spp pilot of the baseline in {:.1} s): {:.0} spp on average there, {:.2}x a uniform render's samples",
+                "  samples: {} of {} analysed pixels boosted (up to {}x, after pilots at {} spp in {:.2} s): {:.0} spp on average there, {:.2}x a uniform render's samples",
                 sa.boosted_pixels,
                 sa.analysed_pixels,
                 sa.max_boost,

@@ -39,6 +39,7 @@ pub struct SamplingReport {
     pub cost_factor: f64,
     /// Mean samples per analysed pixel.
     pub mean_spp_analysed: f64,
+    /// The pilots' run time: their traces and the boost map (not the ocean or the meshes).
     pub seconds_pilot: f64,
 }
 
