@@ -122,8 +122,16 @@ impl<'a> Sampler<'a> {
         );
         for ((uv, split), out) in uv.chunks(8).zip(split.chunks(8)).zip(out.chunks_mut(8)) {
             let count = uv.len();
+            // (lanes past `count` at (0, 0))
+            let uv: [[f32; 2]; 8] = std::array::from_fn(|p| uv.get(p).copied().unwrap_or_default());
             let mut sum = [[0.0f32; FIELD_COUNT]; 8];
             for (i, (layer, o)) in self.layers.iter().zip(&self.origin).enumerate() {
+                // The points' texel coordinates in the layer itself, once for all its levels.
+                let inv = layer.inv_dx();
+                let own: [[f64; 8]; 2] =
+                    std::array::from_fn(|c| std::array::from_fn(|p| o[c] + uv[p][c] as f64 * inv));
+                // (a sampler without levels reads only splits that need none)
+                let last = self.levels.map(|levels| levels.count(i));
                 // Each point's reads: (level, weight), the finer and the coarser.
                 let reads = |p: usize| -> [(usize, f32); 2] {
                     let (l, t) = (split[p].levels[i], split[p].blend[i]);
@@ -131,11 +139,12 @@ impl<'a> Sampler<'a> {
                         return [(usize::MAX, 0.0); 2];
                     }
                     let l = l as usize;
-                    let coarser = if t > 0.0 && l < self.levels_of().count(i) {
-                        l + 1
-                    } else {
-                        usize::MAX
-                    };
+                    let coarser =
+                        if t > 0.0 && l < last.unwrap_or_else(|| self.levels_of().count(i)) {
+                            l + 1
+                        } else {
+                            usize::MAX
+                        };
                     [(l, 1.0 - t), (coarser, t)]
                 };
                 // each level read once for every point that reads it (rarely more than three)
@@ -160,10 +169,7 @@ impl<'a> Sampler<'a> {
                     // Level l's grid is 2^l times coarser over the same square: its texel
                     // coordinates are the layer's divided by 2^l, exactly.
                     let scale = 0.5f64.powi(l as i32);
-                    let inv = layer.inv_dx();
-                    let at = |p: usize, c: usize| {
-                        (o[c] + uv.get(p).map_or(0.0, |q| q[c]) as f64 * inv) * scale
-                    };
+                    let at = |p: usize, c: usize| own[c][p] * scale;
                     let mut t = [[0.0f32; FIELD_COUNT]; 8];
                     if self.interp == Interp::Bicubic {
                         for (p, t) in t.iter_mut().enumerate().take(count) {
