@@ -85,20 +85,20 @@ impl Frame {
         Frame::with(x, z, earth_radius_m, sin_versine).0
     }
 
-    /// The frame from `sin_versine` of the angle about the nadir, and whether that angle is
+    /// The frame from `sine_versine` of the angle about the nadir, and whether that angle is
     /// within the series' reach (false for NaN).
     #[inline(always)]
     fn with(
         x: f64,
         z: f64,
         earth_radius_m: f64,
-        sin_versine: impl Fn(f64) -> (f64, f64),
+        sine_versine: impl Fn(f64) -> (f64, f64),
     ) -> (Frame, bool) {
         // (no overflow to guard against at sea-scale distances: sqrt, not hypot)
         let r = (x * x + z * z).sqrt();
         let (ux, uz) = if r > 0.0 { (x / r, z / r) } else { (1.0, 0.0) };
         let theta = r / earth_radius_m;
-        let (st, vers) = sin_versine(theta);
+        let (st, vers) = sine_versine(theta);
         let ct = 1.0 - vers;
         let drop = earth_radius_m * vers;
         let frame = Frame {

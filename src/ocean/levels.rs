@@ -130,8 +130,6 @@ impl<'a> Sampler<'a> {
                 let inv = layer.inv_dx();
                 let own: [[f64; 8]; 2] =
                     std::array::from_fn(|c| std::array::from_fn(|p| o[c] + uv[p][c] as f64 * inv));
-                // (a sampler without levels reads only splits that need none)
-                let last = self.levels.map(|levels| levels.count(i));
                 // Each point's reads: (level, weight), the finer and the coarser.
                 let reads = |p: usize| -> [(usize, f32); 2] {
                     let (l, t) = (split[p].levels[i], split[p].blend[i]);
@@ -139,12 +137,11 @@ impl<'a> Sampler<'a> {
                         return [(usize::MAX, 0.0); 2];
                     }
                     let l = l as usize;
-                    let coarser =
-                        if t > 0.0 && l < last.unwrap_or_else(|| self.levels_of().count(i)) {
-                            l + 1
-                        } else {
-                            usize::MAX
-                        };
+                    let coarser = if t > 0.0 && l < self.levels_of().count(i) {
+                        l + 1
+                    } else {
+                        usize::MAX
+                    };
                     [(l, 1.0 - t), (coarser, t)]
                 };
                 // each level read once for every point that reads it (rarely more than three)
